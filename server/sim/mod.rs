@@ -1,0 +1,17 @@
+//! The simulated tasks, free of IO: Gymnasium's `reset`/`step` contract on rapier.
+//!
+//! - `env`: the `Env` trait, spaces, `Step`, render state and geometry.
+//! - `task`: the `Task` enum that names the three tasks and builds them.
+//! - `reaching`, `placing`: table-top tasks on rapier3d (`tabletop` holds their shared world).
+//! - `lunar_lander`: Gymnasium's `LunarLanderContinuous-v3` on rapier2d.
+//! - `rollout`: run a random or heuristic policy for whole episodes and summarise them.
+
+mod env;
+pub mod lunar_lander;
+pub mod placing;
+pub mod reaching;
+pub mod rollout;
+mod task;
+
+pub use env::{BoxSpace, Cuboid, Env, EnvSpec, Geometry, Outcome, Pose2, Pose3, RenderState, Step};
+pub use task::{Task, UnknownTask};
