@@ -24,7 +24,9 @@ fn env_steps(c: &mut Criterion) {
         group.bench_function(task.id(), |b| {
             b.iter(|| {
                 for _ in 0..STEPS {
-                    action.iter_mut().for_each(|a| *a = rng.random_range(-1.0..=1.0));
+                    action
+                        .iter_mut()
+                        .for_each(|a| *a = rng.random_range(-1.0..=1.0));
                     if env.step(&action).done() {
                         episode += 1;
                         env.reset(episode);
