@@ -1,0 +1,102 @@
+//! The `dualrep` binary as a user runs it: JSON on success, a clear message and a non-zero exit
+//! on bad arguments.
+
+use std::process::{Command, Output};
+
+fn dualrep(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_dualrep"))
+        .args(args)
+        .output()
+        .expect("binary runs")
+}
+
+#[test]
+fn sim_prints_one_json_summary_with_every_field() {
+    let out = dualrep(&[
+        "sim",
+        "--task",
+        "reaching",
+        "--policy",
+        "heuristic",
+        "--episodes",
+        "3",
+        "--seed",
+        "5",
+    ]);
+    assert!(
+        out.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(
+        stdout.lines().count(),
+        1,
+        "one JSON object on one line: {stdout}"
+    );
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(v["task"], "reaching");
+    assert_eq!(v["policy"], "heuristic");
+    assert_eq!(v["episodes"], 3);
+    for field in [
+        "mean_return",
+        "std_return",
+        "mean_length",
+        "success_rate",
+        "steps_per_second",
+    ] {
+        assert!(v[field].is_number(), "{field} missing in {v}");
+    }
+    assert!(v["steps_per_second"].as_f64().unwrap() > 0.0);
+}
+
+#[test]
+fn sim_is_reproducible_from_its_seed() {
+    let args = [
+        "sim",
+        "--task",
+        "placing",
+        "--policy",
+        "random",
+        "--episodes",
+        "2",
+        "--seed",
+        "11",
+    ];
+    let strip = |out: Output| {
+        let mut v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        v.as_object_mut().unwrap().remove("steps_per_second");
+        v
+    };
+    assert_eq!(strip(dualrep(&args)), strip(dualrep(&args)));
+}
+
+fn assert_rejected(args: &[&str], expected_in_message: &str) {
+    let out = dualrep(args);
+    assert!(!out.status.success(), "{args:?} should fail");
+    assert!(out.stdout.is_empty(), "nothing on stdout for {args:?}");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains(expected_in_message),
+        "{args:?}: stderr was {stderr}"
+    );
+}
+
+#[test]
+fn bad_arguments_exit_non_zero_with_a_clear_message() {
+    assert_rejected(
+        &["sim", "--task", "cartpole"],
+        "expected one of reaching, placing, lunar-lander",
+    );
+    assert_rejected(
+        &["sim", "--task", "reaching", "--policy", "greedy"],
+        "expected random or heuristic",
+    );
+    assert_rejected(
+        &["sim", "--task", "reaching", "--episodes", "0"],
+        "--episodes",
+    );
+    assert_rejected(&["sim", "--task", "reaching", "--seed", "-3"], "--seed");
+    assert_rejected(&["sim"], "--task");
+    assert_rejected(&["fly"], "unrecognized subcommand");
+}
