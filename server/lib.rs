@@ -14,11 +14,13 @@
 //!   Lunar Lander (rapier2d, Gymnasium's semantics); heuristic controllers; rollouts.
 //! - [`scene_graph`]: each task's predicates, evaluated on `(s_{t+1}, a_t)` into an
 //!   `AbstractState` bit vector.
+//! - [`guidance`]: when to ask (DREF's UCB query rule, EF-p%) and, later, what to ask (DRPL).
 //!
 //! The edge:
 //!
 //! - [`cli`]: the `dualrep` command line (`sim` today).
 
 pub mod cli;
+pub mod guidance;
 pub mod scene_graph;
 pub mod sim;

@@ -1,0 +1,235 @@
+//! DREF's query rule: a UCB1 score per abstract state g over the human critic's feedback
+//! prediction error, and a rank test that decides whether to ask at this step.
+//!
+//! Two forms (algorithms.md section 2, step 4):
+//! - `authors` (default; it produced the published curves):
+//!   `UCB(g) = mean_err(g) + c * sqrt(2 * N / (N(g) + 1))` with mean_err the running mean of
+//!   `|H - H_hat|` in g.
+//! - `paper` (Eq. 1 and 2): `UCB(g) = FPE(g) + c * sqrt(2 ln N / N(g))` with FPE the running mean
+//!   of `(H - H_hat)^2` in g; an abstract state without feedback scores +inf.
+//!
+//! Only abstract states that have received feedback are ranked; the rule asks iff at most k of
+//! them score strictly higher than the current state.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::scene_graph::AbstractState;
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum UcbForm {
+    /// `mean |H - H_hat| + c sqrt(2 N / (N(g) + 1))`, as in the authors' code.
+    #[default]
+    Authors,
+    /// `mean (H - H_hat)^2 + c sqrt(2 ln N / N(g))`, the paper's Eq. 1-2.
+    Paper,
+}
+
+/// Feedback statistics of one abstract state.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct StateStats {
+    /// N(g): feedback received in this abstract state.
+    pub count: u64,
+    /// Running mean of the prediction error (absolute or squared, by form).
+    pub mean_error: f64,
+}
+
+/// The UCB query rule with its running statistics (serialisable, so a checkpoint keeps it).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct QueryRule {
+    pub c: f64,
+    pub k: usize,
+    pub form: UcbForm,
+    /// N: all feedback so far.
+    total: u64,
+    /// Per abstract state; a `BTreeMap` so that checkpoints serialise in a stable order.
+    stats: BTreeMap<AbstractState, StateStats>,
+}
+
+impl QueryRule {
+    pub fn new(c: f64, k: usize, form: UcbForm) -> Self {
+        Self {
+            c,
+            k,
+            form,
+            total: 0,
+            stats: BTreeMap::new(),
+        }
+    }
+
+    /// N, the feedback received so far.
+    pub fn total_feedback(&self) -> u64 {
+        self.total
+    }
+
+    /// The statistics of `g` (zero if it never received feedback).
+    pub fn stats(&self, g: AbstractState) -> StateStats {
+        self.stats.get(&g).copied().unwrap_or_default()
+    }
+
+    /// Abstract states that received feedback, with their statistics.
+    pub fn seen(&self) -> impl Iterator<Item = (AbstractState, StateStats)> + '_ {
+        self.stats.iter().map(|(g, s)| (*g, *s))
+    }
+
+    /// UCB(g) under the configured form.
+    pub fn score(&self, g: AbstractState) -> f64 {
+        let s = self.stats(g);
+        let n = self.total as f64;
+        match self.form {
+            UcbForm::Authors => s.mean_error + self.c * (2.0 * n / (s.count as f64 + 1.0)).sqrt(),
+            UcbForm::Paper if s.count == 0 => f64::INFINITY,
+            // N >= N(g) >= 1 here, so ln N >= 0.
+            UcbForm::Paper => s.mean_error + self.c * (2.0 * n.ln() / s.count as f64).sqrt(),
+        }
+    }
+
+    /// Whether to ask for feedback in abstract state `g`: iff at most `k` abstract states that
+    /// have received feedback score strictly higher than `g`.
+    pub fn should_query(&self, g: AbstractState) -> bool {
+        let own = self.score(g);
+        let mut higher = 0usize;
+        for other in self.stats.keys() {
+            if self.score(*other) > own {
+                higher += 1;
+                if higher > self.k {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// Record the trainer's answer `h` in `g`, where the human critic predicted `h_hat` before
+    /// this step's update. Every answer counts, "no feedback" (0) included.
+    pub fn record(&mut self, g: AbstractState, h: f32, h_hat: f32) {
+        let diff = f64::from(h) - f64::from(h_hat);
+        let error = match self.form {
+            UcbForm::Authors => diff.abs(),
+            UcbForm::Paper => diff * diff,
+        };
+        let s = self.stats.entry(g).or_default();
+        s.count += 1;
+        s.mean_error += (error - s.mean_error) / s.count as f64;
+        self.total += 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const A: AbstractState = AbstractState(0b01);
+    const B: AbstractState = AbstractState(0b10);
+    const C: AbstractState = AbstractState(0b11);
+
+    #[test]
+    fn the_first_step_always_asks() {
+        for form in [UcbForm::Authors, UcbForm::Paper] {
+            assert!(QueryRule::new(0.1, 0, form).should_query(A));
+        }
+    }
+
+    #[test]
+    fn running_mean_of_absolute_error_per_state() {
+        let mut rule = QueryRule::new(0.1, 2, UcbForm::Authors);
+        rule.record(A, 1.0, 0.5);
+        rule.record(A, -1.0, 0.0);
+        rule.record(B, 0.0, 0.25);
+        assert_eq!(rule.total_feedback(), 3);
+        assert_eq!(
+            rule.stats(A),
+            StateStats {
+                count: 2,
+                mean_error: 0.75
+            }
+        );
+        assert_eq!(
+            rule.stats(B),
+            StateStats {
+                count: 1,
+                mean_error: 0.25
+            }
+        );
+    }
+
+    #[test]
+    fn authors_score_matches_the_formula() {
+        let mut rule = QueryRule::new(0.2, 4, UcbForm::Authors);
+        rule.record(A, 1.0, 0.5);
+        rule.record(A, 1.0, 0.7);
+        rule.record(B, -1.0, 0.0);
+        // N = 3; A: N(g) = 2, mean 0.4; B: N(g) = 1, mean 1.0; C unseen.
+        let close = |x: f64, y: f64| (x - y).abs() < 1e-6;
+        assert!(close(rule.score(A), 0.4 + 0.2 * (6.0f64 / 3.0).sqrt()));
+        assert!(close(rule.score(B), 1.0 + 0.2 * (6.0f64 / 2.0).sqrt()));
+        assert!(close(rule.score(C), 0.2 * 6.0f64.sqrt()));
+    }
+
+    #[test]
+    fn paper_score_uses_squared_error_and_log_count() {
+        let mut rule = QueryRule::new(0.2, 4, UcbForm::Paper);
+        rule.record(A, 1.0, 0.5);
+        rule.record(B, -1.0, 0.0);
+        rule.record(B, 1.0, 0.0);
+        let close = |x: f64, y: f64| (x - y).abs() < 1e-6;
+        assert!(close(
+            rule.score(A),
+            0.25 + 0.2 * (2.0 * 3.0f64.ln() / 1.0).sqrt()
+        ));
+        assert!(close(
+            rule.score(B),
+            1.0 + 0.2 * (2.0 * 3.0f64.ln() / 2.0).sqrt()
+        ));
+        assert_eq!(rule.score(C), f64::INFINITY);
+        assert!(rule.should_query(C));
+    }
+
+    #[test]
+    fn asks_only_when_at_most_k_seen_states_score_higher() {
+        // Three seen states with clearly ordered errors, tiny exploration bonus.
+        let mut rule = QueryRule::new(1e-6, 0, UcbForm::Authors);
+        let low = AbstractState(4);
+        rule.record(A, 1.0, 0.0); // error 1.0
+        rule.record(B, 1.0, 0.5); // error 0.5
+        rule.record(low, 1.0, 0.9); // error 0.1
+        assert!(rule.should_query(A), "top state is asked with k = 0");
+        assert!(!rule.should_query(B), "one state scores higher, k = 0");
+        rule.k = 1;
+        assert!(rule.should_query(B));
+        assert!(!rule.should_query(low), "two states score higher, k = 1");
+        rule.k = 2;
+        assert!(rule.should_query(low));
+    }
+
+    #[test]
+    fn an_unseen_state_gets_the_largest_bonus() {
+        let mut rule = QueryRule::new(0.1, 0, UcbForm::Authors);
+        for _ in 0..50 {
+            rule.record(A, 1.0, 1.0); // perfectly predicted: error 0
+        }
+        assert!(rule.score(C) > rule.score(A));
+        assert!(rule.should_query(C));
+    }
+
+    #[test]
+    fn a_well_predicted_state_stops_being_asked() {
+        let mut rule = QueryRule::new(0.1, 0, UcbForm::Authors);
+        rule.record(B, 1.0, -1.0); // B is badly predicted: error 2
+        for _ in 0..20 {
+            rule.record(A, 1.0, 0.95);
+        }
+        assert!(!rule.should_query(A));
+        assert!(rule.should_query(B));
+    }
+
+    #[test]
+    fn survives_a_serde_round_trip() {
+        let mut rule = QueryRule::new(0.2, 60, UcbForm::Paper);
+        rule.record(A, 1.0, 0.0);
+        let back: QueryRule = serde_json::from_str(&serde_json::to_string(&rule).unwrap()).unwrap();
+        assert_eq!(back, rule);
+    }
+}
