@@ -11,6 +11,7 @@ pub mod lunar_lander;
 pub mod placing;
 pub mod reaching;
 pub mod rollout;
+mod tabletop;
 mod task;
 
 pub use env::{BoxSpace, Cuboid, Env, EnvSpec, Geometry, Outcome, Pose2, Pose3, RenderState, Step};

@@ -1,12 +1,107 @@
-//! Reaching (being written).
+//! Reaching: move the gripper over the table into the goal area at the table's centre.
+//!
+//! - obs = gripper (x, y); action in `[-1, 1]^2`, a full action moves 5 mm per 50 ms step.
+//! - Safety gate: a move that would leave the table (`|x| < 0.38`, `|y| < 0.35`) is zeroed.
+//! - Reset: a uniform start on the table outside the goal area, then 100 small random moves
+//!   (uniform `±0.05` actions, through the gate) that count toward the 1000-step horizon. If
+//!   those moves end inside the goal area, the reset draws a new start (same seed stream), so an
+//!   episode never starts solved.
+//! - +100 and termination on entering the goal area, 0 otherwise.
+//!
+//! The gripper is a kinematic body in the shared table-top world; nothing dynamic moves here,
+//! so the physics pipeline is never stepped: the gripper's position is set directly.
 
-use super::{Env, EnvSpec, Geometry, RenderState, Step};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
-pub struct Reaching {}
+use super::tabletop::{
+    self, CONTROL_HZ, MAX_EPISODE_STEPS, Region, TABLE_TOP_Z, TableWorld, clip_action, gated_move,
+};
+use super::{BoxSpace, Env, EnvSpec, Geometry, Outcome, RenderState, Step};
+
+/// Half widths of the goal area (the scene graph's band edges are the same numbers).
+pub const GOAL_HALF_X: f32 = 0.05;
+pub const GOAL_HALF_Y: f32 = 0.125;
+/// Half sizes of the table top, which is also the safety gate's rectangle.
+pub const TABLE_HALF_X: f32 = 0.38;
+pub const TABLE_HALF_Y: f32 = 0.35;
+/// Gripper travel per step at full action.
+pub const STEP_SIZE: f32 = 0.005;
+/// Steps the reset spends on random moves (they count toward the horizon).
+pub const RESET_STEPS: u32 = 100;
+/// Size of the reset's random actions.
+const RESET_ACTION: f32 = 0.05;
+/// The gripper's locked height: just above the table top.
+pub const GRIPPER_Z: f32 = TABLE_TOP_Z + 0.03;
+
+const WORKSPACE: Region<2> = Region {
+    lo: [-TABLE_HALF_X, -TABLE_HALF_Y],
+    hi: [TABLE_HALF_X, TABLE_HALF_Y],
+};
+
+/// Inside the goal area, edges included, to agree with the scene graph's "centred" bands
+/// (whose conjunction is success).
+pub fn in_goal(p: [f32; 2]) -> bool {
+    p[0].abs() <= GOAL_HALF_X && p[1].abs() <= GOAL_HALF_Y
+}
+
+/// The gripper after action `a` (already clipped) from `p`, through the safety gate.
+fn gated(p: [f32; 2], a: [f32; 2]) -> [f32; 2] {
+    gated_move(p, a, STEP_SIZE, STEP_SIZE, |q| WORKSPACE.contains(q))
+}
+
+pub struct Reaching {
+    spec: EnvSpec,
+    world: TableWorld,
+    elapsed: u32,
+    done: bool,
+}
 
 impl Reaching {
     pub fn new() -> Self {
-        todo!()
+        let spec = EnvSpec {
+            id: "reaching",
+            observation_space: BoxSpace {
+                low: vec![-TABLE_HALF_X, -TABLE_HALF_Y],
+                high: vec![TABLE_HALF_X, TABLE_HALF_Y],
+            },
+            action_space: BoxSpace::uniform(2, -1.0, 1.0),
+            observation_names: vec!["gripper_x", "gripper_y"],
+            action_names: vec!["dx", "dy"],
+            max_episode_steps: MAX_EPISODE_STEPS,
+            control_hz: CONTROL_HZ,
+        };
+        // Until the first reset: the gripper at a table corner, the episode not started.
+        let world = Self::build_world([-0.3, -0.3]);
+        Self {
+            spec,
+            world,
+            elapsed: 0,
+            done: true,
+        }
+    }
+
+    fn table() -> super::Cuboid {
+        tabletop::table([0.0, 0.0], [TABLE_HALF_X, TABLE_HALF_Y])
+    }
+
+    fn build_world(p: [f32; 2]) -> TableWorld {
+        let mut world = TableWorld::new(
+            &Self::table(),
+            [p[0], p[1], GRIPPER_Z],
+            tabletop::CONTROL_DT,
+        );
+        world.refresh();
+        world
+    }
+
+    fn gripper_xy(&self) -> [f32; 2] {
+        let [x, y, _] = self.world.gripper();
+        [x, y]
+    }
+
+    fn set_gripper_xy(&mut self, p: [f32; 2]) {
+        self.world.set_gripper([p[0], p[1], GRIPPER_Z]);
     }
 }
 
@@ -18,28 +113,132 @@ impl Default for Reaching {
 
 impl Env for Reaching {
     fn spec(&self) -> &EnvSpec {
-        todo!()
+        &self.spec
     }
-    fn reset(&mut self, _seed: u64) -> Vec<f32> {
-        todo!()
+
+    fn reset(&mut self, seed: u64) -> Vec<f32> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let p = loop {
+            let mut p = loop {
+                let p = [
+                    rng.random_range(-TABLE_HALF_X..TABLE_HALF_X),
+                    rng.random_range(-TABLE_HALF_Y..TABLE_HALF_Y),
+                ];
+                if !in_goal(p) {
+                    break p;
+                }
+            };
+            for _ in 0..RESET_STEPS {
+                let a = [
+                    rng.random_range(-RESET_ACTION..=RESET_ACTION),
+                    rng.random_range(-RESET_ACTION..=RESET_ACTION),
+                ];
+                p = gated(p, a);
+            }
+            // A start the random moves pushed into the goal would be a free success: redraw.
+            if !in_goal(p) {
+                break p;
+            }
+        };
+        self.world = Self::build_world(p);
+        self.elapsed = RESET_STEPS;
+        self.done = false;
+        self.observation()
     }
-    fn step(&mut self, _action: &[f32]) -> Step {
-        todo!()
+
+    fn step(&mut self, action: &[f32]) -> Step {
+        assert!(
+            !self.done,
+            "step called after the episode ended; call reset"
+        );
+        let a = clip_action::<2>(action);
+        let p = gated(self.gripper_xy(), a);
+        self.set_gripper_xy(p);
+        self.elapsed += 1;
+        let event = in_goal(p).then_some(Outcome::Success);
+        let step = tabletop::make_step(self.observation(), self.elapsed, event);
+        self.done = step.done();
+        step
     }
+
     fn observation(&self) -> Vec<f32> {
-        todo!()
+        self.gripper_xy().to_vec()
     }
+
     fn elapsed_steps(&self) -> u32 {
-        todo!()
+        self.elapsed
     }
+
     fn render(&self) -> RenderState {
-        todo!()
+        RenderState::Reaching {
+            gripper: tabletop::upright(self.world.gripper()),
+        }
     }
+
     fn geometry(&self) -> Geometry {
-        todo!()
+        Geometry::Reaching {
+            table: Self::table(),
+            goal: [-GOAL_HALF_X, -GOAL_HALF_Y, GOAL_HALF_X, GOAL_HALF_Y],
+            workspace: [-TABLE_HALF_X, -TABLE_HALF_Y, TABLE_HALF_X, TABLE_HALF_Y],
+        }
     }
 }
 
-pub fn heuristic(_obs: &[f32]) -> [f32; 2] {
-    todo!()
+/// Go to the goal's centre: a proportional controller that saturates more than one step away.
+pub fn heuristic(obs: &[f32]) -> [f32; 2] {
+    [
+        (-obs[0] / STEP_SIZE).clamp(-1.0, 1.0),
+        (-obs[1] / STEP_SIZE).clamp(-1.0, 1.0),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn goal_matches_the_scene_graph_bands() {
+        use crate::scene_graph::reaching as sg;
+        assert_eq!(
+            (GOAL_HALF_X, GOAL_HALF_Y),
+            (sg::GOAL_HALF_X, sg::GOAL_HALF_Y)
+        );
+        for p in [
+            [0.05, 0.0],
+            [0.0501, 0.0],
+            [0.0, -0.125],
+            [0.0, -0.1251],
+            [0.3, 0.3],
+        ] {
+            let bits = sg::evaluate(&p).to_bit_string(6);
+            let centred = &bits[1..2] == "1" && &bits[4..5] == "1";
+            assert_eq!(in_goal(p), centred, "{p:?}");
+        }
+    }
+
+    #[test]
+    fn reset_starts_outside_the_goal_after_100_moves() {
+        let mut env = Reaching::new();
+        for seed in 0..200 {
+            let obs = env.reset(seed);
+            assert!(!in_goal([obs[0], obs[1]]));
+            assert!(WORKSPACE.contains(&[obs[0], obs[1]]));
+            assert_eq!(env.elapsed_steps(), RESET_STEPS);
+        }
+    }
+
+    #[test]
+    fn heuristic_saturates_far_away_and_is_proportional_near() {
+        assert_eq!(heuristic(&[0.3, -0.2]), [-1.0, 1.0]);
+        let a = heuristic(&[0.0025, -0.001]);
+        assert!((a[0] + 0.5).abs() < 1e-6 && (a[1] - 0.2).abs() < 1e-6);
+    }
+
+    #[test]
+    fn nan_action_stands_still() {
+        let mut env = Reaching::new();
+        let obs = env.reset(3);
+        let step = env.step(&[f32::NAN, f32::NAN]);
+        assert_eq!(step.obs, obs);
+    }
 }

@@ -1,0 +1,415 @@
+//! Reaching and Placing through the public `Env` interface: heuristic and random success rates,
+//! the ball's fate, the safety gates, the horizon and determinism.
+
+use dualrep::sim::placing::{self, Placing};
+use dualrep::sim::reaching::{self, Reaching};
+use dualrep::sim::rollout::{SimplePolicy, run_episodes};
+use dualrep::sim::{Env, Geometry, Outcome, RenderState, Step, Task};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+// ---------------------------------------------------------------- success rates
+
+#[test]
+fn reaching_heuristic_succeeds_in_95_percent() {
+    let (s, _) = run_episodes(Task::Reaching, SimplePolicy::Heuristic, 100, 0);
+    assert!(s.success_rate >= 0.95, "{s:?}");
+}
+
+#[test]
+fn placing_heuristic_succeeds_in_90_percent() {
+    let (s, _) = run_episodes(Task::Placing, SimplePolicy::Heuristic, 100, 0);
+    assert!(s.success_rate >= 0.90, "{s:?}");
+}
+
+/// Random play rarely succeeds. Measured over seeds 0..100: Reaching 13 %, Placing 15 % (over
+/// 1000 episodes from seed 1000: 10.2 % and 14.2 %); the bounds leave room for small changes.
+#[test]
+fn random_policies_rarely_succeed() {
+    let (r, _) = run_episodes(Task::Reaching, SimplePolicy::Random, 100, 0);
+    assert!(r.success_rate < 0.20, "{r:?}");
+    let (p, _) = run_episodes(Task::Placing, SimplePolicy::Random, 100, 0);
+    assert!(p.success_rate < 0.25, "{p:?}");
+}
+
+// ---------------------------------------------------------------- Placing: the ball
+
+fn placing_obs(env: &Placing) -> [f32; 4] {
+    env.observation().try_into().unwrap()
+}
+
+/// Fly the closed gripper to `target` (rise, cross at travel height, then move vertically)
+/// with proportional laws soft enough that the safety gate never blocks them. Panics if the
+/// episode ends on the way.
+fn fly_to(env: &mut Placing, target: [f32; 3]) {
+    let travel = target[2].max(1.1);
+    for _ in 0..400 {
+        let [x, y, z, _] = placing_obs(env);
+        let near_xy = (x - target[0]).abs() < 1e-3 && (y - target[1]).abs() < 1e-3;
+        if near_xy && (z - target[2]).abs() < 1e-3 {
+            return;
+        }
+        let p = |to: f32, at: f32, scale: f32| ((to - at) / scale).clamp(-1.0, 1.0);
+        let a = if !near_xy && z < travel - 0.01 {
+            [0.0, 0.0, p(travel, z, 0.1), 1.0]
+        } else if !near_xy {
+            [p(target[0], x, 0.05), p(target[1], y, 0.05), 0.0, 1.0]
+        } else {
+            [0.0, 0.0, p(target[2], z, 0.1), 1.0]
+        };
+        let step = env.step(&a);
+        assert!(
+            !step.done(),
+            "episode ended on the way to {target:?}: {step:?}"
+        );
+    }
+    panic!("did not reach {target:?}: at {:?}", env.observation());
+}
+
+/// Open the gripper and stand still until the episode ends; the last step and the number of
+/// steps it took.
+fn release_and_wait(env: &mut Placing) -> (Step, u32) {
+    for n in 1..=100 {
+        let step = env.step(&[0.0, 0.0, 0.0, -1.0]);
+        if step.done() {
+            return (step, n);
+        }
+    }
+    panic!("the released ball was never decided");
+}
+
+fn ball(env: &Placing) -> ([f32; 3], bool) {
+    match env.render() {
+        RenderState::Placing {
+            ball, ball_held, ..
+        } => (ball, ball_held),
+        other => panic!("wrong render state {other:?}"),
+    }
+}
+
+#[test]
+fn ball_released_over_the_ring_falls_through() {
+    let mut env = Placing::new();
+    env.reset(7);
+    fly_to(&mut env, [0.0, 0.0, 1.05]);
+    assert!(ball(&env).1, "the ball starts held");
+    let (step, n) = release_and_wait(&mut env);
+    assert_eq!(step.outcome, Some(Outcome::Success));
+    assert!(step.terminated && step.reward == 100.0);
+    assert!(n <= 3, "a 5 cm drop takes about 0.1 s, took {n} steps");
+    let (b, held) = ball(&env);
+    assert!(!held && b[2] < placing::HOOP_TOP_Z && b[0].abs() < 0.1 && b[1].abs() < 0.1);
+}
+
+#[test]
+fn ball_released_over_the_ring_off_centre_still_falls_through() {
+    // 5 cm off centre in both axes: still clear of the plates (opening half 0.1, ball 0.025).
+    let mut env = Placing::new();
+    env.reset(8);
+    fly_to(&mut env, [0.05, -0.05, 1.2]);
+    let (step, _) = release_and_wait(&mut env);
+    assert_eq!(step.outcome, Some(Outcome::Success));
+}
+
+#[test]
+fn ball_released_over_the_table_away_from_the_hoop_fails() {
+    let mut env = Placing::new();
+    env.reset(9);
+    fly_to(&mut env, [-0.45, 0.2, 1.2]);
+    let (step, _) = release_and_wait(&mut env);
+    assert_eq!(step.outcome, Some(Outcome::Failure));
+    assert!(step.terminated && step.reward == 0.0);
+}
+
+#[test]
+fn ball_released_over_the_closed_top_rests_there_and_fails_after_two_seconds() {
+    let mut env = Placing::new();
+    env.reset(10);
+    fly_to(&mut env, [0.17, 0.0, 1.06]);
+    let (step, n) = release_and_wait(&mut env);
+    assert_eq!(step.outcome, Some(Outcome::Failure));
+    assert_eq!(n, 40, "2 s at 20 Hz");
+    let (b, _) = ball(&env);
+    // It came to rest on the plate: centre one radius above the hoop's top.
+    assert!(
+        (b[2] - placing::HOOP_TOP_Z - placing::BALL_RADIUS).abs() < 0.005,
+        "{b:?}"
+    );
+}
+
+#[test]
+fn closing_again_does_not_regrasp() {
+    let mut env = Placing::new();
+    env.reset(11);
+    fly_to(&mut env, [-0.45, 0.2, 1.5]);
+    env.step(&[0.0, 0.0, 0.0, -1.0]);
+    let step = env.step(&[0.0, 0.0, 1.0, 1.0]);
+    assert_eq!(step.obs[3], 1.0, "the gripper reports the last command");
+    assert!(!ball(&env).1, "but the ball stays free");
+}
+
+#[test]
+fn gripper_touching_the_hoop_from_the_side_fails() {
+    let mut env = Placing::new();
+    env.reset(12);
+    fly_to(&mut env, [-0.35, 0.0, 0.9]);
+    let mut last = None;
+    for _ in 0..20 {
+        let step = env.step(&[1.0, 0.0, 0.0, 1.0]);
+        if step.done() {
+            last = Some(step);
+            break;
+        }
+    }
+    let step = last.expect("the gripper should have hit the hoop's wall");
+    assert_eq!(step.outcome, Some(Outcome::Failure));
+    // It touched the wall (outer face x = -0.25) before the gate's no-entry box stopped it.
+    let x = step.obs[0];
+    assert!(x > -0.25 - placing::BALL_RADIUS && x < -0.17, "x = {x}");
+    assert!(ball(&env).1, "the ball was still held");
+}
+
+#[test]
+fn gripper_touching_the_top_from_beyond_the_no_entry_box_fails() {
+    // Over the hoop's -x end (x < -0.17) nothing stops a descent onto the top plates.
+    let mut env = Placing::new();
+    env.reset(13);
+    fly_to(&mut env, [-0.21, 0.0, 1.1]);
+    let mut outcome = None;
+    for _ in 0..20 {
+        let step = env.step(&[0.0, 0.0, -0.5, 1.0]);
+        if step.done() {
+            assert!(step.obs[2] < placing::HOOP_TOP_Z + placing::BALL_RADIUS);
+            outcome = step.outcome;
+            break;
+        }
+    }
+    assert_eq!(outcome, Some(Outcome::Failure));
+}
+
+// ---------------------------------------------------------------- safety gates
+
+#[test]
+fn reaching_gate_stops_at_each_table_edge_and_lets_the_gripper_back() {
+    for (axis, sign) in [(0, 1.0f32), (0, -1.0), (1, 1.0), (1, -1.0)] {
+        let mut env = Reaching::new();
+        env.reset(3);
+        let edge = if axis == 0 {
+            reaching::TABLE_HALF_X
+        } else {
+            reaching::TABLE_HALF_Y
+        };
+        // First push the other coordinate away from the centre, so the path along `axis`
+        // cannot cross the goal area (whose bands are narrower than the table).
+        let other = 1 - axis;
+        let mut away = [0.0f32; 2];
+        away[other] = env.observation()[other].signum();
+        for _ in 0..200 {
+            env.step(&away);
+        }
+        let mut push = [0.0f32; 2];
+        push[axis] = sign;
+        // Full speed to the edge: the gripper stops within one step of it, still inside.
+        let mut at = env.observation();
+        for _ in 0..200 {
+            at = env.step(&push).obs;
+        }
+        let d = edge - sign * at[axis];
+        assert!(
+            d > 0.0 && d <= reaching::STEP_SIZE,
+            "axis {axis} sign {sign}: {at:?}"
+        );
+        // A move with an outward component is zeroed as a whole, the other axis too.
+        let mut outward = [sign * 0.5; 2];
+        outward[axis] = sign;
+        assert_eq!(env.step(&outward).obs, at);
+        // Just short of leaving is allowed; back inward is allowed.
+        let mut small = [0.0f32; 2];
+        small[axis] = sign * 0.9 * d / reaching::STEP_SIZE;
+        let inside = env.step(&small).obs;
+        assert!(sign * inside[axis] > sign * at[axis] && sign * inside[axis] < edge);
+        let back = env.step(&[-push[0], -push[1]]).obs;
+        assert!(sign * back[axis] < sign * inside[axis]);
+    }
+}
+
+#[test]
+fn placing_gate_looks_ahead_further_than_the_move() {
+    let mut env = Placing::new();
+    env.reset(14);
+    fly_to(&mut env, [-0.45, 0.2, 1.0]);
+    // Full speed down: stops once z - 0.07 would leave the workspace (z > 0.80), i.e. with
+    // the gripper still 5 to 7 cm above the workspace's floor.
+    let mut z = 1.0;
+    for _ in 0..30 {
+        z = env.step(&[0.0, 0.0, -1.0, 1.0]).obs[2];
+    }
+    assert!(z > 0.80 + placing::LOOKAHEAD - placing::STEP_SIZE && z <= 0.80 + placing::LOOKAHEAD);
+    assert_eq!(env.step(&[0.0, 0.0, -1.0, 1.0]).obs[2], z);
+    // Smaller actions probe less far and creep closer.
+    let lower = env.step(&[0.0, 0.0, -0.5, 1.0]).obs[2];
+    assert!(lower < z);
+}
+
+#[test]
+fn placing_gate_keeps_the_gripper_above_the_no_entry_box_over_the_hoop() {
+    let mut env = Placing::new();
+    env.reset(15);
+    fly_to(&mut env, [0.0, 0.0, 1.1]);
+    for _ in 0..100 {
+        let step = env.step(&[0.0, 0.0, -1.0, 1.0]);
+        assert!(!step.done());
+        assert!(step.obs[2] >= 1.03, "{:?}", step.obs);
+    }
+    // Not even small actions get it below the box's top.
+    for _ in 0..200 {
+        let step = env.step(&[0.0, 0.0, -0.05, 1.0]);
+        assert!(!step.done() && step.obs[2] > 1.03);
+    }
+}
+
+// ---------------------------------------------------------------- horizon
+
+fn run_until_done(env: &mut dyn Env, action: &[f32]) -> (Step, u32) {
+    for n in 1..=2000 {
+        let step = env.step(action);
+        if step.done() {
+            return (step, n);
+        }
+    }
+    panic!("no end in 2000 steps");
+}
+
+#[test]
+fn reset_moves_count_toward_the_horizon_and_episodes_truncate_at_1000() {
+    let mut reaching = Reaching::new();
+    reaching.reset(5);
+    assert_eq!(reaching.elapsed_steps(), 100);
+    let (step, n) = run_until_done(&mut reaching, &[0.0, 0.0]);
+    assert_eq!((n, reaching.elapsed_steps()), (900, 1000));
+    assert!(step.truncated && !step.terminated);
+    assert_eq!(step.outcome, Some(Outcome::TimeLimit));
+
+    let mut placing = Placing::new();
+    placing.reset(5);
+    assert_eq!(placing.elapsed_steps(), 50);
+    let (step, n) = run_until_done(&mut placing, &[0.0, 0.0, 0.0, 1.0]);
+    assert_eq!((n, placing.elapsed_steps()), (950, 1000));
+    assert!(step.truncated && !step.terminated && step.reward == 0.0);
+    assert_eq!(step.outcome, Some(Outcome::TimeLimit));
+}
+
+#[test]
+#[should_panic(expected = "after the episode ended")]
+fn stepping_after_the_end_panics() {
+    let mut env = Reaching::new();
+    env.reset(1);
+    run_until_done(&mut env, &[0.0, 0.0]);
+    env.step(&[0.0, 0.0]);
+}
+
+// ---------------------------------------------------------------- determinism
+
+/// Observations and rewards (as bits) of an episode of seeded random actions; Placing keeps the
+/// gripper closed for `hold` steps so the ball's flight is part of the trace.
+fn trace(env: &mut dyn Env, seed: u64, hold: usize) -> Vec<u32> {
+    let mut bits: Vec<u32> = env.reset(seed).iter().map(|v| v.to_bits()).collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed + 99);
+    let dim = env.spec().action_space.dim();
+    for t in 0.. {
+        let mut a: Vec<f32> = (0..dim).map(|_| rng.random_range(-1.0..=1.0)).collect();
+        if dim == 4 {
+            a[3] = if t < hold { 1.0 } else { -1.0 };
+        }
+        let step = env.step(&a);
+        bits.extend(step.obs.iter().map(|v| v.to_bits()));
+        bits.push(step.reward.to_bits());
+        if step.done() {
+            break;
+        }
+    }
+    bits
+}
+
+#[test]
+fn same_seed_same_actions_give_bit_identical_episodes() {
+    for task in [Task::Reaching, Task::Placing] {
+        let (mut a, mut b) = (task.make_env(), task.make_env());
+        for seed in [0, 1, 42] {
+            // Run another episode on `b` first: history must not matter.
+            trace(b.as_mut(), seed + 1000, 30);
+            let ta = trace(a.as_mut(), seed, 30);
+            assert_eq!(ta, trace(b.as_mut(), seed, 30), "{task} seed {seed}");
+            assert_ne!(
+                ta,
+                trace(b.as_mut(), seed + 1, 30),
+                "{task} seeds {seed}, {}",
+                seed + 1
+            );
+        }
+        assert_ne!(a.reset(0), a.reset(1));
+    }
+}
+
+// ---------------------------------------------------------------- spec, render, geometry
+
+#[test]
+fn specs_render_states_and_geometry_fit_the_tasks() {
+    for task in [Task::Reaching, Task::Placing] {
+        let mut env = task.make_env();
+        let spec = env.spec().clone();
+        assert_eq!(spec.id, task.id());
+        assert_eq!((spec.max_episode_steps, spec.control_hz), (1000, 20.0));
+        let n = spec.action_space.dim();
+        assert_eq!(spec.action_names.len(), n);
+        assert!(spec.action_space.low.iter().all(|&v| v == -1.0));
+        assert!(spec.action_space.high.iter().all(|&v| v == 1.0));
+        assert_eq!(spec.observation_names.len(), spec.observation_space.dim());
+        let obs = env.reset(2);
+        assert_eq!(obs.len(), spec.observation_space.dim());
+        assert_eq!(env.observation(), obs);
+        for ((v, lo), hi) in obs
+            .iter()
+            .zip(&spec.observation_space.low)
+            .zip(&spec.observation_space.high)
+        {
+            assert!(lo <= v && v <= hi, "{task}: {obs:?}");
+        }
+        assert_eq!(task.heuristic(&obs).len(), n);
+        match (task, env.render(), env.geometry()) {
+            (
+                Task::Reaching,
+                RenderState::Reaching { gripper },
+                Geometry::Reaching { goal, .. },
+            ) => {
+                assert_eq!(&gripper.position[..2], &obs[..]);
+                assert_eq!(goal, [-0.05, -0.125, 0.05, 0.125]);
+            }
+            (
+                Task::Placing,
+                RenderState::Placing {
+                    gripper,
+                    gripper_closed,
+                    ball,
+                    ball_held,
+                },
+                Geometry::Placing {
+                    hoop_parts,
+                    opening,
+                    hoop_top_z,
+                    ball_radius,
+                    no_entry,
+                    ..
+                },
+            ) => {
+                assert_eq!(&gripper.position[..], &obs[..3]);
+                assert!(gripper_closed && ball_held && ball == gripper.position);
+                assert_eq!(hoop_parts.len(), 8);
+                assert_eq!(opening, [-0.1, -0.1, 0.1, 0.1]);
+                assert_eq!((hoop_top_z, ball_radius), (1.0, 0.025));
+                assert_eq!(no_entry, [-0.17, -0.16, 0.80, 0.2, 0.16, 1.03]);
+            }
+            other => panic!("{task}: mismatched render/geometry {other:?}"),
+        }
+    }
+}
