@@ -14,11 +14,14 @@
 //!   Lunar Lander (rapier2d, Gymnasium's semantics); heuristic controllers; rollouts.
 //! - [`scene_graph`]: each task's predicates, evaluated on `(s_{t+1}, a_t)` into an
 //!   `AbstractState` bit vector.
+//! - [`rl`]: the networks of SAC and the human critic: MLPs on nalgebra with a hand-written
+//!   backward pass, Adam, losses.
 //!
 //! The edge:
 //!
 //! - [`cli`]: the `dualrep` command line (`sim` today).
 
 pub mod cli;
+pub mod rl;
 pub mod scene_graph;
 pub mod sim;
