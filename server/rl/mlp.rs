@@ -189,7 +189,8 @@ impl Mlp {
     }
 
     /// Forward pass of the batch in `ws.input_mut()`; the result is `ws.output()`. Keeps every
-    /// hidden activation in `ws` for the backward pass. Allocates nothing.
+    /// hidden activation in `ws` for the backward pass. Allocates nothing of its own (each
+    /// product does, inside `sgemm`: see the module map of `rl`).
     pub fn forward(&self, ws: &mut MlpWorkspace) {
         ws.check_shape(&self.layers);
         let last = self.layers.len() - 1;
