@@ -14,6 +14,8 @@
 //!   Lunar Lander (rapier2d, Gymnasium's semantics); heuristic controllers; rollouts.
 //! - [`scene_graph`]: each task's predicates, evaluated on `(s_{t+1}, a_t)` into an
 //!   `AbstractState` bit vector.
+//! - [`rl`]: SAC's parts: MLPs on nalgebra with a hand-written backward pass, Adam, losses,
+//!   the tanh-squashed Gaussian policy, the replay buffer.
 //! - [`guidance`]: when to ask (DREF's UCB query rule, EF-p%) and, later, what to ask (DRPL).
 //!
 //! The edge:
@@ -22,5 +24,6 @@
 
 pub mod cli;
 pub mod guidance;
+pub mod rl;
 pub mod scene_graph;
 pub mod sim;

@@ -1,0 +1,99 @@
+"""Reference values for `tests/rl_gradients.rs`, computed with PyTorch.
+
+Builds the MLP of the test (6 -> 8 -> 7 -> 6, ReLU between, linear output) with parameters from
+a formula written identically in Rust, runs forward, MSE loss, backward and two Adam steps, and
+prints Rust constants to paste beside the test.
+
+    pip install torch==2.15.0   # CPU is enough
+    python3 benches/reference/torch_reference_values.py
+
+Formulas (k is the flat index; parameters in `named_parameters()` order, each row-major):
+    parameter[k] = 0.5 * sin(1.3 k + 0.1)
+    input[k]     = cos(0.5 k)     (batch-major (9, 6))
+    target[k]    = sin(0.3 k)     (batch-major (9, 6))
+each computed in float64 and rounded to float32.
+"""
+
+import math
+
+import numpy as np
+import torch
+
+N_IN, HIDDEN, N_OUT, BATCH = 6, [8, 7], 6, 9
+LR = 0.01
+# Parameter indices whose gradient and updated value are printed (plus sums over all of them).
+PROBE = list(range(0, 167, 11))
+
+
+class Mlp(torch.nn.Module):
+    def __init__(self, sizes):
+        super().__init__()
+        self.layers = torch.nn.ModuleList(torch.nn.Linear(a, b) for a, b in zip(sizes, sizes[1:]))
+
+    def forward(self, x):
+        for layer in self.layers[:-1]:
+            x = torch.relu(layer(x))
+        return self.layers[-1](x)
+
+
+def formula(n, f):
+    return torch.tensor([f(k) for k in range(n)], dtype=torch.float64).float()
+
+
+def f32(value):
+    """The shortest literal that reads back as the same f32 (what clippy asks for)."""
+    return str(np.float32(value))
+
+
+def rust_array(name, values):
+    values = [float(v) for v in values]
+    body = ", ".join(f32(v) for v in values)
+    return f"const {name}: [f32; {len(values)}] = [{body}];"
+
+
+def main():
+    torch.set_default_dtype(torch.float32)
+    mlp = Mlp([N_IN, *HIDDEN, N_OUT])
+    flat = formula(sum(p.numel() for p in mlp.parameters()), lambda k: 0.5 * math.sin(1.3 * k + 0.1))
+    with torch.no_grad():
+        offset = 0
+        for p in mlp.parameters():
+            p.copy_(flat[offset : offset + p.numel()].view_as(p))
+            offset += p.numel()
+    assert offset == 167
+
+    x = formula(BATCH * N_IN, lambda k: math.cos(0.5 * k)).view(BATCH, N_IN).requires_grad_(True)
+    y = formula(BATCH * N_OUT, lambda k: math.sin(0.3 * k)).view(BATCH, N_OUT)
+    adam = torch.optim.Adam(mlp.parameters(), lr=LR)
+
+    def flat_grads():
+        return torch.cat([p.grad.reshape(-1) for p in mlp.parameters()])
+
+    def flat_params():
+        return torch.cat([p.detach().reshape(-1) for p in mlp.parameters()])
+
+    print(f"// torch {torch.__version__}, benches/reference/torch_reference_values.py")
+    for step in range(2):
+        adam.zero_grad()
+        x.grad = None
+        out = mlp(x)
+        loss = torch.nn.functional.mse_loss(out, y)
+        loss.backward()
+        g = flat_grads()
+        print(f"const LOSS_{step}: f32 = {f32(loss.item())};")
+        if step == 0:
+            print(rust_array("OUTPUT_0", out.detach().reshape(-1)))
+            print(rust_array("INPUT_GRAD_0", x.grad.reshape(-1)))
+            print(rust_array("GRAD_0_PROBE", g[PROBE]))
+            print(f"const GRAD_0_SUM: f32 = {f32(g.double().sum().item())};")
+            print(f"const GRAD_0_ABS_SUM: f32 = {f32(g.double().abs().sum().item())};")
+        adam.step()
+    p = flat_params()
+    print(rust_array("PARAMS_2_PROBE", p[PROBE]))
+    print(f"const PARAMS_2_SUM: f32 = {f32(p.double().sum().item())};")
+    print(f"const PARAMS_2_ABS_SUM: f32 = {f32(p.double().abs().sum().item())};")
+    print(f"// PROBE = {PROBE}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,387 @@
+//! A multi-layer perceptron: `Linear` layers with ReLU between them and a linear output, its
+//! forward pass, its hand-written backward pass, and the parameter plumbing (flat slices, Polyak
+//! averaging, names for checkpoints).
+//!
+//! # Layout
+//!
+//! Every tensor has the bytes of its PyTorch counterpart:
+//!
+//! - a batch of activations, PyTorch's row-major `(batch, n)`, is a column-major `n x batch`
+//!   [`DMatrix`]: one column per sample, each sample contiguous (what a replay buffer copies in);
+//! - a weight, PyTorch's row-major `(n_out, n_in)`, is stored flat; read column-major it is
+//!   `W^T`, an `n_in x n_out` matrix.
+//!
+//! Whatever the layout, each layer's three products contract different pairs of dimensions, so
+//! two of them need a transposed operand. Here that is always a zero-copy strided view, and every
+//! product is one `sgemm` call (`rl::gemm`), which packs any strides into its own panels:
+//!
+//! | product | formula | operands |
+//! |---|---|---|
+//! | forward | `z = W x + b` | `W`: the weight buffer viewed with strides `(n_in, 1)` |
+//! | input gradient | `dx = W^T dz` | `W^T`: the weight buffer as stored |
+//! | weight gradient | `dW^T += x dz^T` | `dz^T`: the gradient buffer viewed with strides `(n_out, 1)` |
+//!
+//! nalgebra's `gemm_tr` would spare the views but loops over `gemv` instead of calling `sgemm`;
+//! nalgebra's `gemm` is avoided for the reason given in `rl::gemm`.
+
+use nalgebra::{DMatrix, DMatrixView, DMatrixViewMut};
+use rand::Rng;
+
+use super::gemm::gemm;
+use super::linear::Linear;
+use super::workspace::MlpWorkspace;
+
+/// One named parameter tensor, in PyTorch's `state_dict` order and shape, for checkpoints.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParamTensor<'a> {
+    /// `layers.{l}.weight` or `layers.{l}.bias`; prefix it with the network's name (`q1.`).
+    pub name: String,
+    /// `[n_out, n_in]` for a weight, `[n_out]` for a bias.
+    pub shape: Vec<usize>,
+    /// Row-major values.
+    pub data: &'a [f32],
+}
+
+/// `n_in -> hidden[0] -> ... -> n_out`, ReLU after every hidden layer, linear output.
+///
+/// All parameters live in one flat vector (and their gradients in a second one of the same
+/// layout) so that Adam, Polyak averaging and copying are single loops over one slice, and a
+/// checkpoint is a list of sub-slices ([`Mlp::named_parameters`]). Activations live outside, in an
+/// [`MlpWorkspace`] sized for one batch, so one network can be evaluated at several batches
+/// (SAC's critic at `(s, a)` and at `(s, pi(s))`) while each keeps what its backward pass needs.
+///
+/// Gradients accumulate, as in PyTorch: call [`Mlp::zero_grad`] before each backward pass whose
+/// result should stand alone.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mlp {
+    layers: Vec<Linear>,
+    params: Vec<f32>,
+    grads: Vec<f32>,
+}
+
+impl Mlp {
+    /// PyTorch's default initialisation of `nn.Linear`: `kaiming_uniform_(a = sqrt(5))` for the
+    /// weight, which is `U(-1/sqrt(n_in), 1/sqrt(n_in))`, and the same bound for the bias.
+    /// Draws each layer's weight (row-major) then its bias, in layer order.
+    pub fn new<R: Rng + ?Sized>(n_in: usize, hidden: &[usize], n_out: usize, rng: &mut R) -> Self {
+        let mut mlp = Self::zeros(n_in, hidden, n_out);
+        for layer in &mlp.layers {
+            let bound = 1.0 / (layer.n_in as f32).sqrt();
+            for p in &mut mlp.params[layer.offset..layer.offset + layer.len()] {
+                *p = rng.random_range(-bound..bound);
+            }
+        }
+        mlp
+    }
+
+    /// A network whose parameters are all zero (to be overwritten, e.g. from a checkpoint).
+    pub fn zeros(n_in: usize, hidden: &[usize], n_out: usize) -> Self {
+        let sizes: Vec<usize> = std::iter::once(n_in)
+            .chain(hidden.iter().copied())
+            .chain(std::iter::once(n_out))
+            .collect();
+        assert!(
+            sizes.iter().all(|&n| n > 0),
+            "layer sizes must be positive: {sizes:?}"
+        );
+        let mut offset = 0;
+        let layers: Vec<Linear> = sizes
+            .windows(2)
+            .map(|pair| {
+                let layer = Linear {
+                    n_in: pair[0],
+                    n_out: pair[1],
+                    offset,
+                };
+                offset += layer.len();
+                layer
+            })
+            .collect();
+        Self {
+            layers,
+            params: vec![0.0; offset],
+            grads: vec![0.0; offset],
+        }
+    }
+
+    pub fn n_in(&self) -> usize {
+        self.layers[0].n_in
+    }
+
+    pub fn n_out(&self) -> usize {
+        self.layers[self.layers.len() - 1].n_out
+    }
+
+    pub fn layers(&self) -> &[Linear] {
+        &self.layers
+    }
+
+    /// A workspace for batches of `batch` samples (allocates; keep it across updates).
+    pub fn workspace(&self, batch: usize) -> MlpWorkspace {
+        MlpWorkspace::new(&self.layers, batch)
+    }
+
+    /// All parameters, flat, in PyTorch's `parameters()` order.
+    pub fn params(&self) -> &[f32] {
+        &self.params
+    }
+
+    pub fn params_mut(&mut self) -> &mut [f32] {
+        &mut self.params
+    }
+
+    /// Accumulated gradients, same layout as [`Mlp::params`].
+    pub fn grads(&self) -> &[f32] {
+        &self.grads
+    }
+
+    pub fn grads_mut(&mut self) -> &mut [f32] {
+        &mut self.grads
+    }
+
+    /// Parameters to update with their gradients: the pair [`crate::rl::Adam::step`] takes.
+    pub fn params_and_grads(&mut self) -> (&mut [f32], &[f32]) {
+        (&mut self.params, &self.grads)
+    }
+
+    pub fn zero_grad(&mut self) {
+        self.grads.fill(0.0);
+    }
+
+    /// `self = online` (parameters only), e.g. to initialise a target network.
+    pub fn copy_params_from(&mut self, online: &Mlp) {
+        assert_eq!(
+            self.layers, online.layers,
+            "copy between networks of different shapes"
+        );
+        self.params.copy_from_slice(&online.params);
+    }
+
+    /// Polyak averaging `self = (1 - tau) self + tau online`, written as stable-baselines3's
+    /// `polyak_update` (`mul_(1 - tau)` then `add_(online, alpha = tau)`).
+    pub fn soft_update_from(&mut self, online: &Mlp, tau: f32) {
+        assert_eq!(
+            self.layers, online.layers,
+            "Polyak update between networks of different shapes"
+        );
+        for (target, &param) in self.params.iter_mut().zip(&online.params) {
+            *target = *target * (1.0 - tau) + tau * param;
+        }
+    }
+
+    /// Parameter tensors with PyTorch names (`layers.0.weight`, `layers.0.bias`, ...), as a
+    /// `ModuleList` of `nn.Linear` called `layers` would name them.
+    pub fn named_parameters(&self) -> impl Iterator<Item = ParamTensor<'_>> {
+        self.layers.iter().enumerate().flat_map(move |(l, layer)| {
+            [
+                ParamTensor {
+                    name: format!("layers.{l}.weight"),
+                    shape: vec![layer.n_out, layer.n_in],
+                    data: layer.weight(&self.params),
+                },
+                ParamTensor {
+                    name: format!("layers.{l}.bias"),
+                    shape: vec![layer.n_out],
+                    data: layer.bias(&self.params),
+                },
+            ]
+        })
+    }
+
+    /// Forward pass of the batch in `ws.input_mut()`; the result is `ws.output()`. Keeps every
+    /// hidden activation in `ws` for the backward pass. Allocates nothing of its own (each
+    /// product does, inside `sgemm`: see the module map of `rl`).
+    pub fn forward(&self, ws: &mut MlpWorkspace) {
+        ws.check_shape(&self.layers);
+        let last = self.layers.len() - 1;
+        for (l, layer) in self.layers.iter().enumerate() {
+            let (before, after) = ws.activations.split_at_mut(l + 1);
+            let x = &before[l];
+            let z = &mut after[0];
+            // z = W x, then + b and ReLU in one pass over z.
+            gemm(1.0, &layer.w(&self.params), x, 0.0, z);
+            let b = layer.bias(&self.params);
+            for column in z.as_mut_slice().chunks_exact_mut(layer.n_out) {
+                for (v, &b_i) in column.iter_mut().zip(b) {
+                    *v += b_i;
+                    // `< 0` rather than `max(0)`: a NaN passes through, as in torch.relu.
+                    if l < last && *v < 0.0 {
+                        *v = 0.0;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Backward pass from `ws.output_grad_mut()` (dL/d output, written by the caller after
+    /// [`Mlp::forward`]): accumulates dL/d parameters into [`Mlp::grads`]. Does not compute the
+    /// input gradient (that saves the first layer's third product).
+    pub fn backward(&mut self, ws: &mut MlpWorkspace) {
+        backward(&self.layers, &self.params, Some(&mut self.grads), ws, false);
+    }
+
+    /// [`Mlp::backward`] plus dL/d input into `ws.input_grad()`.
+    pub fn backward_with_input_grad(&mut self, ws: &mut MlpWorkspace) {
+        backward(&self.layers, &self.params, Some(&mut self.grads), ws, true);
+    }
+
+    /// dL/d input into `ws.input_grad()` only, the parameter gradients untouched: a frozen
+    /// network, such as SAC's critic inside the actor loss. Takes `&self`, so the borrow checker
+    /// proves the critic unchanged.
+    pub fn backward_input(&self, ws: &mut MlpWorkspace) {
+        backward(&self.layers, &self.params, None, ws, true);
+    }
+}
+
+/// Layer by layer from the output: `ws.grads[l + 1]` holds dL/dz of layer `l` (for a hidden layer,
+/// dL/dh already masked by the ReLU derivative), from which come
+/// `dW^T += x dz^T`, `db += sum over the batch of dz`, and `dx = W^T dz`.
+fn backward(
+    layers: &[Linear],
+    params: &[f32],
+    mut param_grads: Option<&mut [f32]>,
+    ws: &mut MlpWorkspace,
+    input_grad: bool,
+) {
+    ws.check_shape(layers);
+    let batch = ws.batch();
+    for (l, layer) in layers.iter().enumerate().rev() {
+        let (below, above) = ws.grads.split_at_mut(l + 1);
+        let dz = &above[0];
+        if let Some(grads) = param_grads.as_deref_mut() {
+            let x = &ws.activations[l];
+            // dz^T (batch x n_out): the column-major dz buffer read with swapped strides.
+            let dz_t = DMatrixView::from_slice_with_strides(
+                dz.as_slice(),
+                batch,
+                layer.n_out,
+                layer.n_out,
+                1,
+            );
+            let mut dw_t = DMatrixViewMut::from_slice(
+                &mut grads[layer.weight_range()],
+                layer.n_in,
+                layer.n_out,
+            );
+            gemm(1.0, x, &dz_t, 1.0, &mut dw_t);
+            let db = &mut grads[layer.bias_range()];
+            for column in dz.as_slice().chunks_exact(layer.n_out) {
+                for (g, &d) in db.iter_mut().zip(column) {
+                    *g += d;
+                }
+            }
+        }
+        if l == 0 && !input_grad {
+            continue;
+        }
+        let dx: &mut DMatrix<f32> = &mut below[l];
+        gemm(1.0, &layer.w_t(params), dz, 0.0, dx);
+        if l > 0 {
+            // Through the ReLU that produced x: h = max(z, 0), so dh/dz = [h > 0].
+            for (g, &h) in dx
+                .as_mut_slice()
+                .iter_mut()
+                .zip(ws.activations[l].as_slice())
+            {
+                if h <= 0.0 {
+                    *g = 0.0;
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn layers_tile_the_flat_vector_in_pytorch_order() {
+        let mlp = Mlp::zeros(3, &[5, 4], 2);
+        let names: Vec<_> = mlp
+            .named_parameters()
+            .map(|t| (t.name, t.shape, t.data.len()))
+            .collect();
+        assert_eq!(
+            names,
+            [
+                ("layers.0.weight".to_string(), vec![5, 3], 15),
+                ("layers.0.bias".to_string(), vec![5], 5),
+                ("layers.1.weight".to_string(), vec![4, 5], 20),
+                ("layers.1.bias".to_string(), vec![4], 4),
+                ("layers.2.weight".to_string(), vec![2, 4], 8),
+                ("layers.2.bias".to_string(), vec![2], 2),
+            ]
+        );
+        assert_eq!(mlp.params().len(), 54);
+        assert_eq!(mlp.layers()[2].offset, 15 + 5 + 20 + 4);
+    }
+
+    #[test]
+    fn init_stays_within_pytorch_bounds_and_fills_them() {
+        let mlp = Mlp::new(16, &[64], 1, &mut ChaCha8Rng::seed_from_u64(7));
+        for layer in mlp.layers() {
+            let bound = 1.0 / (layer.n_in as f32).sqrt();
+            let w = layer.weight(mlp.params());
+            assert!(w.iter().all(|v| v.abs() <= bound));
+            // Uniform on the whole interval, not a narrower one.
+            let max = w.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+            assert!(
+                max > 0.9 * bound,
+                "layer {layer:?}: max |w| {max} vs bound {bound}"
+            );
+        }
+        let again = Mlp::new(16, &[64], 1, &mut ChaCha8Rng::seed_from_u64(7));
+        assert_eq!(mlp, again, "same seed, same network");
+    }
+
+    #[test]
+    fn forward_matches_a_naive_loop() {
+        let mlp = Mlp::new(7, &[9, 8], 6, &mut ChaCha8Rng::seed_from_u64(1));
+        let mut ws = mlp.workspace(10);
+        for (k, v) in ws.input_mut().iter_mut().enumerate() {
+            *v = (k as f32 * 0.37).sin();
+        }
+        mlp.forward(&mut ws);
+        for sample in 0..10 {
+            let mut x: Vec<f32> = ws.input().column(sample).iter().copied().collect();
+            for (l, layer) in mlp.layers().iter().enumerate() {
+                let (w, b) = (layer.weight(mlp.params()), layer.bias(mlp.params()));
+                x = (0..layer.n_out)
+                    .map(|o| {
+                        let z = b[o]
+                            + (0..layer.n_in)
+                                .map(|i| w[o * layer.n_in + i] * x[i])
+                                .sum::<f32>();
+                        if l + 1 < mlp.layers().len() {
+                            z.max(0.0)
+                        } else {
+                            z
+                        }
+                    })
+                    .collect();
+            }
+            for (o, &want) in x.iter().enumerate() {
+                let got = ws.output()[(o, sample)];
+                assert!(
+                    (got - want).abs() < 1e-5,
+                    "sample {sample} output {o}: {got} vs {want}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn polyak_update_moves_tau_of_the_way() {
+        let online = Mlp::new(2, &[3], 1, &mut ChaCha8Rng::seed_from_u64(1));
+        let mut target = Mlp::zeros(2, &[3], 1);
+        target.soft_update_from(&online, 0.25);
+        for (t, o) in target.params().iter().zip(online.params()) {
+            assert!((t - 0.25 * o).abs() < 1e-7);
+        }
+        target.copy_params_from(&online);
+        assert_eq!(target.params(), online.params());
+    }
+}

@@ -1,0 +1,143 @@
+//! The training loop allocates nothing of its own once the workspaces exist.
+//!
+//! A counting global allocator (its own test binary, so no other test shares it) counts, per
+//! thread, the allocations made during SAC-like update steps. Every matrix product goes to
+//! matrixmultiply's `sgemm`, which allocates (and frees) its packing buffer inside every call;
+//! that is the only allocation allowed: exactly one per product, and nothing still live after.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+use dualrep::rl::{Adam, AdamConfig, Mlp, MlpWorkspace, mse_loss};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+    static LIVE_BYTES: Cell<isize> = const { Cell::new(0) };
+}
+
+// SAFETY: defers to the system allocator; the thread-local counters are const-initialised
+// `Cell`s without destructors, so touching them never allocates or re-enters the allocator.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.with(|n| n.set(n.get() + 1));
+        LIVE_BYTES.with(|b| b.set(b.get() + layout.size() as isize));
+        unsafe { System.alloc(layout) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        LIVE_BYTES.with(|b| b.set(b.get() - layout.size() as isize));
+        unsafe { System.dealloc(ptr, layout) }
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.with(|n| n.set(n.get() + 1));
+        LIVE_BYTES.with(|b| b.set(b.get() + new_size as isize - layout.size() as isize));
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// (allocations, net bytes still live) made by `f` on this thread.
+fn count(f: impl FnOnce()) -> (usize, isize) {
+    let (n0, b0) = (ALLOCATIONS.with(Cell::get), LIVE_BYTES.with(Cell::get));
+    f();
+    (
+        ALLOCATIONS.with(Cell::get) - n0,
+        LIVE_BYTES.with(Cell::get) - b0,
+    )
+}
+
+/// A critic, its Polyak target, an actor and their optimisers, as in a SAC update.
+struct Sac {
+    q: Mlp,
+    q_target: Mlp,
+    actor: Mlp,
+    q_opt: Adam,
+    actor_opt: Adam,
+    q_ws: MlpWorkspace,
+    actor_ws: MlpWorkspace,
+    target: Vec<f32>,
+}
+
+impl Sac {
+    fn new(obs_dim: usize, act_dim: usize, hidden: &[usize], batch: usize) -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(0);
+        let q = Mlp::new(obs_dim + act_dim, hidden, 1, &mut rng);
+        let actor = Mlp::new(obs_dim, hidden, 2 * act_dim, &mut rng);
+        let mut q_ws = q.workspace(batch);
+        q_ws.input_mut().fill(0.3);
+        let mut actor_ws = actor.workspace(batch);
+        actor_ws.input_mut().fill(-0.2);
+        Self {
+            q_target: q.clone(),
+            q_opt: Adam::new(AdamConfig::default(), &[q.params().len()]),
+            actor_opt: Adam::new(AdamConfig::default(), &[actor.params().len()]),
+            q,
+            actor,
+            q_ws,
+            actor_ws,
+            target: vec![1.0; batch],
+        }
+    }
+
+    /// Critic regression, actor through the frozen critic, Polyak update.
+    fn update(&mut self) {
+        self.q.zero_grad();
+        self.q.forward(&mut self.q_ws);
+        let (q_sa, dq) = self.q_ws.output_and_grad_mut();
+        mse_loss(q_sa.as_slice(), &self.target, dq.as_mut_slice());
+        self.q.backward(&mut self.q_ws);
+        self.q_opt.step([self.q.params_and_grads()]);
+
+        self.actor.forward(&mut self.actor_ws);
+        self.q.forward(&mut self.q_ws);
+        self.q_ws.output_grad_mut().fill(-1.0);
+        self.q.backward_input(&mut self.q_ws);
+        let dl_da = self.q_ws.input_grad().as_slice()[0];
+        self.actor_ws.output_grad_mut().fill(dl_da);
+        self.actor.zero_grad();
+        self.actor.backward(&mut self.actor_ws);
+        self.actor_opt.step([self.actor.params_and_grads()]);
+
+        self.q_target.soft_update_from(&self.q, 0.01);
+    }
+}
+
+/// Matrix products of `forwards` forward passes, `param_backwards` backward passes that
+/// accumulate parameter gradients (without the input gradient) and `input_backwards` passes that
+/// compute the input gradient only: per layer, one product forward, one for dL/dW and one for
+/// dL/dx, except that a parameter pass does not go below the first layer.
+fn products(mlp: &Mlp, forwards: usize, param_backwards: usize, input_backwards: usize) -> usize {
+    let layers = mlp.layers().len();
+    forwards * layers + param_backwards * (2 * layers - 1) + input_backwards * layers
+}
+
+#[test]
+fn rl_training_step_allocates_only_sgemm_packing_buffers_after_warm_up() {
+    // A small network, and SAC's Reaching size at its batch.
+    for (obs_dim, act_dim, hidden, batch) in [(3, 1, &[5, 4][..], 5), (8, 2, &[64, 64], 512)] {
+        let mut sac = Sac::new(obs_dim, act_dim, hidden, batch);
+        sac.update();
+        // The critic: two forward passes, one parameter backward, one input backward. The
+        // actor: one forward, one parameter backward. Three layers each.
+        let per_update = products(&sac.q, 2, 1, 1) + products(&sac.actor, 1, 1, 0);
+        assert_eq!(per_update, (6 + 5 + 3) + (3 + 5));
+        for step in 0..5 {
+            let (allocations, live) = count(|| sac.update());
+            assert_eq!(
+                allocations, per_update,
+                "{hidden:?} update {step}: allocations beyond sgemm's"
+            );
+            assert_eq!(
+                live, 0,
+                "{hidden:?} update {step}: memory kept past the update"
+            );
+        }
+    }
+}
