@@ -96,7 +96,10 @@ fn bad_arguments_exit_non_zero_with_a_clear_message() {
         &["sim", "--task", "reaching", "--episodes", "0"],
         "--episodes",
     );
-    assert_rejected(&["sim", "--task", "reaching", "--seed=-3"], "invalid value '-3' for '--seed");
+    assert_rejected(
+        &["sim", "--task", "reaching", "--seed=-3"],
+        "invalid value '-3' for '--seed",
+    );
     assert_rejected(&["sim"], "--task");
     assert_rejected(&["fly"], "unrecognized subcommand");
 }

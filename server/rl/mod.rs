@@ -13,6 +13,9 @@
 //! - `gemm` (private): the one matrix product, matrixmultiply's `sgemm` on nalgebra matrices and views.
 //! - [`adam`]: [`Adam`] with PyTorch's defaults and arithmetic.
 //! - [`loss`]: [`mse_loss`] with its gradient.
+//! - [`squashed_gaussian`]: SAC's tanh-squashed Gaussian policy head: sampling, log-prob
+//!   with the tanh correction, and its gradient.
+//! - [`replay`]: the preallocated replay buffer, `(s, a, r, H, s', terminated)` per row.
 //!
 //! ## Allocation
 //!
@@ -84,6 +87,8 @@ mod gemm;
 pub mod linear;
 pub mod loss;
 pub mod mlp;
+pub mod replay;
+pub mod squashed_gaussian;
 pub mod workspace;
 
 pub use adam::{Adam, AdamConfig};

@@ -1,0 +1,206 @@
+//! The replay buffer: preallocated, f32, one row per transition, with the human feedback H
+//! stored beside the environment reward (DREF's `(s, a, r, H, s', terminated)`).
+//!
+//! Storage is sample-major (one transition's observation is contiguous), which is exactly the
+//! layout of a column-major `features x batch` matrix, so a sampled batch feeds the networks
+//! without a transpose.
+
+use rand::Rng;
+
+/// One transition, borrowed from the caller.
+#[derive(Clone, Copy, Debug)]
+pub struct Transition<'a> {
+    pub obs: &'a [f32],
+    pub action: &'a [f32],
+    pub reward: f32,
+    /// Human feedback in {-1, 0, +1}; 0 when nobody was asked.
+    pub human: f32,
+    pub next_obs: &'a [f32],
+    /// A true end of the MDP: masks the bootstrap. Truncation (time limit) is not termination.
+    pub terminated: bool,
+}
+
+/// A sampled minibatch, preallocated for `size` transitions and refilled in place.
+#[derive(Clone, Debug)]
+pub struct Batch {
+    pub size: usize,
+    /// `size x obs_dim`, one observation after another.
+    pub obs: Vec<f32>,
+    pub actions: Vec<f32>,
+    pub rewards: Vec<f32>,
+    pub human: Vec<f32>,
+    pub next_obs: Vec<f32>,
+    /// 1.0 where the transition terminated, else 0.0 (so `1 - done` masks the bootstrap).
+    pub dones: Vec<f32>,
+}
+
+impl Batch {
+    pub fn new(size: usize, obs_dim: usize, act_dim: usize) -> Self {
+        Self {
+            size,
+            obs: vec![0.0; size * obs_dim],
+            actions: vec![0.0; size * act_dim],
+            rewards: vec![0.0; size],
+            human: vec![0.0; size],
+            next_obs: vec![0.0; size * obs_dim],
+            dones: vec![0.0; size],
+        }
+    }
+}
+
+/// A ring buffer of transitions; the oldest are overwritten once it is full.
+#[derive(Clone, Debug)]
+pub struct ReplayBuffer {
+    obs_dim: usize,
+    act_dim: usize,
+    capacity: usize,
+    len: usize,
+    /// Where the next transition goes.
+    head: usize,
+    obs: Vec<f32>,
+    actions: Vec<f32>,
+    rewards: Vec<f32>,
+    human: Vec<f32>,
+    next_obs: Vec<f32>,
+    dones: Vec<f32>,
+}
+
+impl ReplayBuffer {
+    /// Allocates everything now: pushing and sampling never allocate.
+    pub fn new(capacity: usize, obs_dim: usize, act_dim: usize) -> Self {
+        assert!(capacity > 0, "replay capacity must be positive");
+        Self {
+            obs_dim,
+            act_dim,
+            capacity,
+            len: 0,
+            head: 0,
+            obs: vec![0.0; capacity * obs_dim],
+            actions: vec![0.0; capacity * act_dim],
+            rewards: vec![0.0; capacity],
+            human: vec![0.0; capacity],
+            next_obs: vec![0.0; capacity * obs_dim],
+            dones: vec![0.0; capacity],
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    pub fn capacity(&self) -> usize {
+        self.capacity
+    }
+
+    /// Store a transition and return its slot, so that its H can be relabelled later (an undo).
+    pub fn push(&mut self, t: Transition<'_>) -> usize {
+        assert_eq!(t.obs.len(), self.obs_dim);
+        assert_eq!(t.next_obs.len(), self.obs_dim);
+        assert_eq!(t.action.len(), self.act_dim);
+        let i = self.head;
+        self.obs[i * self.obs_dim..(i + 1) * self.obs_dim].copy_from_slice(t.obs);
+        self.next_obs[i * self.obs_dim..(i + 1) * self.obs_dim].copy_from_slice(t.next_obs);
+        self.actions[i * self.act_dim..(i + 1) * self.act_dim].copy_from_slice(t.action);
+        self.rewards[i] = t.reward;
+        self.human[i] = t.human;
+        self.dones[i] = if t.terminated { 1.0 } else { 0.0 };
+        self.head = (self.head + 1) % self.capacity;
+        self.len = (self.len + 1).min(self.capacity);
+        i
+    }
+
+    /// Replace the human feedback stored in `slot`.
+    pub fn set_human(&mut self, slot: usize, human: f32) {
+        assert!(slot < self.len, "slot {slot} not filled");
+        self.human[slot] = human;
+    }
+
+    pub fn human(&self, slot: usize) -> f32 {
+        self.human[slot]
+    }
+
+    /// Fill `batch` with transitions drawn uniformly with replacement.
+    pub fn sample<R: Rng>(&self, rng: &mut R, batch: &mut Batch) {
+        assert!(!self.is_empty(), "sampling an empty replay buffer");
+        let (od, ad) = (self.obs_dim, self.act_dim);
+        for b in 0..batch.size {
+            let i = rng.random_range(0..self.len);
+            batch.obs[b * od..(b + 1) * od].copy_from_slice(&self.obs[i * od..(i + 1) * od]);
+            batch.next_obs[b * od..(b + 1) * od]
+                .copy_from_slice(&self.next_obs[i * od..(i + 1) * od]);
+            batch.actions[b * ad..(b + 1) * ad]
+                .copy_from_slice(&self.actions[i * ad..(i + 1) * ad]);
+            batch.rewards[b] = self.rewards[i];
+            batch.human[b] = self.human[i];
+            batch.dones[b] = self.dones[i];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    fn push_marked(buf: &mut ReplayBuffer, mark: f32, terminated: bool) -> usize {
+        buf.push(Transition {
+            obs: &[mark, mark + 0.5],
+            action: &[-mark],
+            reward: mark * 10.0,
+            human: 0.0,
+            next_obs: &[mark + 1.0, mark + 1.5],
+            terminated,
+        })
+    }
+
+    #[test]
+    fn sampled_rows_keep_each_transition_together() {
+        let mut buf = ReplayBuffer::new(8, 2, 1);
+        for m in 0..5 {
+            push_marked(&mut buf, m as f32, m == 4);
+        }
+        let mut batch = Batch::new(64, 2, 1);
+        buf.sample(&mut ChaCha8Rng::seed_from_u64(0), &mut batch);
+        for b in 0..64 {
+            let m = batch.obs[2 * b];
+            assert!((0.0..5.0).contains(&m));
+            assert_eq!(batch.obs[2 * b + 1], m + 0.5);
+            assert_eq!(batch.actions[b], -m);
+            assert_eq!(batch.rewards[b], m * 10.0);
+            assert_eq!(batch.next_obs[2 * b], m + 1.0);
+            assert_eq!(batch.dones[b], if m == 4.0 { 1.0 } else { 0.0 });
+        }
+    }
+
+    #[test]
+    fn a_full_buffer_overwrites_the_oldest() {
+        let mut buf = ReplayBuffer::new(3, 2, 1);
+        let slots: Vec<usize> = (0..5)
+            .map(|m| push_marked(&mut buf, m as f32, false))
+            .collect();
+        assert_eq!(slots, vec![0, 1, 2, 0, 1]);
+        assert_eq!(buf.len(), 3);
+        let mut batch = Batch::new(200, 2, 1);
+        buf.sample(&mut ChaCha8Rng::seed_from_u64(1), &mut batch);
+        let mut seen: Vec<f32> = batch.rewards.clone();
+        seen.sort_by(f32::total_cmp);
+        seen.dedup();
+        assert_eq!(seen, vec![20.0, 30.0, 40.0], "the two oldest are gone");
+    }
+
+    #[test]
+    fn human_feedback_can_be_relabelled() {
+        let mut buf = ReplayBuffer::new(4, 2, 1);
+        let slot = push_marked(&mut buf, 1.0, false);
+        buf.set_human(slot, -1.0);
+        assert_eq!(buf.human(slot), -1.0);
+        let mut batch = Batch::new(4, 2, 1);
+        buf.sample(&mut ChaCha8Rng::seed_from_u64(2), &mut batch);
+        assert!(batch.human.iter().all(|&h| h == -1.0));
+    }
+}
