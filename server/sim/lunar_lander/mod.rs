@@ -10,7 +10,6 @@
 
 mod engines;
 mod heuristic;
-mod leg_joint;
 mod sleep;
 mod terrain;
 mod world;

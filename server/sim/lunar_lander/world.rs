@@ -1,48 +1,52 @@
 //! The rapier2d world of one episode: the ground, the hull and its two legs, built as Gymnasium
-//! builds them on Box2D, with rapier tuned to behave like Box2D where it matters.
+//! builds them on Box2D, with rapier set up to behave like Box2D where it matters.
 //!
-//! Box2D settings we reproduce, and how:
+//! - Legs: each leg hangs from the hull on a revolute joint with Box2D's limits and motor
+//!   (speed 0.3 i, at most 40 N m). Rapier's *impulse* joints cannot carry the standing
+//!   lander: the hull is 68 times heavier than a leg and its weight reaches the ground through a
+//!   0.9-unit lever, and under that load the motor row gives way (the legs fold until the hull
+//!   lies on the ground, whatever the torque bound or iteration count; measured on rapier2d
+//!   0.36.1). So hull and legs form one *multibody*: reduced coordinates make the hinges exact,
+//!   and the motors and limits are then rows on the joint coordinates, which hold the load as
+//!   Box2D's 180 velocity iterations do (the legs give under a hard landing and the motors push
+//!   them back to the rest limit). Warm starting is off: with it, the standing multibody jitters
+//!   in a limit cycle far above Box2D's sleep tolerances, so the lander would never rest.
+//! - Impulses: Box2D's `ApplyLinearImpulse` on the hull becomes a generalised impulse on the
+//!   multibody, `dq' = M^-1 J^T p` (J the hull's body Jacobian, M the augmented mass), which
+//!   moves the whole articulated lander exactly as a hull impulse followed by Box2D's joint
+//!   solver does. The one-step initial force is the impulse `F dt`.
 //! - Friction: Box2D mixes `sqrt(f1 * f2)`; rapier's `GeometricMean` rule is that same formula,
 //!   so every collider keeps Gymnasium's own coefficient (hull 0.1, legs Box2D's default 0.2,
 //!   ground 0.1). Restitution is 0 everywhere (Box2D mixes with max).
-//! - Joint stiffness: Gymnasium steps Box2D with 180 velocity and 60 position iterations, which
-//!   makes the hull-leg hinges effectively rigid. rapier's joints are rigid by default (1 MHz
-//!   spring); we keep that, warm-start them and run `SOLVER_ITERATIONS` substeps.
-//! - Leg motors: Box2D's revolute motor is a hard velocity constraint whose accumulated impulse is
-//!   clamped to `maxMotorTorque * dt`. A rapier velocity motor with a huge damping factor
-//!   (zero constraint-force mixing) and `max_force` = the torque is that constraint; rapier
-//!   clamps it per substep to `max_force * substep_dt`, the same total per step. The joint
-//!   limits are folded into that motor (see `leg_joint.rs` for why and how).
-//!
-//! KNOWN GAP: with the lander standing on its legs, rapier's solver does not transmit the
-//! hull's weight through the light legs (0.07 vs 4.8 mass units) to the ground: the motor's
-//! impulse stays far below its bound and the legs fold until the hull touches the ground. More
-//! substeps or PGS iterations, joint warm-starting, stiffer contacts and larger motor torques
-//! did not change that; Box2D holds the same load with the motor saturated at 40 N m against
-//! the limit. So landings end as crashes and the lander never comes to rest.
 //! - Sleeping: rapier's sleeping is off for the lander; `sleep.rs` applies Box2D's rule.
 //! - Touching: Box2D reports a contact once the shapes' skins (`b2_polygonRadius` = 0.01 on the
 //!   polygon and on the edge) overlap, i.e. when the cores are closer than 0.02; we test
 //!   rapier's contact points against that same distance.
 
+use rapier2d::na;
 use rapier2d::prelude::*;
 
-use super::leg_joint::LegJoint;
 use super::terrain::Terrain;
 use super::{
     H, LANDER_POLY, LEG_AWAY, LEG_DOWN, LEG_H, LEG_SPRING_TORQUE, LEG_W, SCALE, W,
     sleep::SleepTimer,
 };
 
-/// Substeps per 1/50 s step: the joint anchors stay within 1e-4 units in flight, and more
-/// substeps did not help the standing lander (see the module docs).
-const SOLVER_ITERATIONS: usize = 8;
+/// Substeps per 1/50 s step, and solver passes per substep. With warm starting off (see
+/// `LanderWorld::new`), one pass per substep lets the motors give way under the standing lander;
+/// eight hold it as Box2D's 180 velocity iterations do, at the cost of a quarter of the speed.
+const SOLVER_ITERATIONS: usize = 4;
+const PGS_ITERATIONS: usize = 8;
 /// The velocity motor's damping factor: large enough that its constraint-force mixing
 /// (`1 / (substep_dt * damping)`) vanishes, i.e. a hard velocity constraint like Box2D's
 /// (finite, so that no `0 * inf` can appear in rapier's coefficient formulas).
 const MOTOR_DAMPING: f32 = 1.0e9;
 /// Box2D's `b2_polygonRadius` on each of the two touching shapes.
 const TOUCHING_DISTANCE: f32 = 2.0 * 0.01;
+/// Gymnasium's joint limits for the `i = -1` leg; the other leg's are their mirror.
+const LEG_LIMITS: [f32; 2] = [0.4, 0.9];
+/// Gymnasium's motor speed magnitude (`0.3 * i`).
+const LEG_MOTOR_SPEED: f32 = 0.3;
 
 /// Collision groups (Gymnasium's category/mask bits): the ground is category 1; the hull
 /// (0x10) and the legs (0x20) collide with the ground only, never with each other.
@@ -77,11 +81,6 @@ pub struct LanderWorld {
     /// Whether the initial push must be removed after the next step (rapier keeps user
     /// forces until reset; Box2D clears them at the end of every step).
     clear_forces: bool,
-    /// The hull-leg revolute joints, and how each folds Box2D's limits into its motor.
-    joints: [ImpulseJointHandle; 2],
-    leg_joints: [LegJoint; 2],
-    /// Each joint's reference angle (the legs' relative angle at creation).
-    references: [f32; 2],
 }
 
 impl LanderWorld {
@@ -93,7 +92,11 @@ impl LanderWorld {
         let params = &mut world.integration_parameters;
         params.dt = 1.0 / super::FPS;
         params.num_solver_iterations = SOLVER_ITERATIONS;
-        params.warmstart_joints = true;
+        params.num_internal_pgs_iterations = PGS_ITERATIONS;
+        // Warm starting makes the standing lander jitter in a five-step limit cycle (about
+        // 0.5 rad/s on the hull) that never lets it rest; without it, the iterations above
+        // converge the motor, limit and contact rows from zero every substep.
+        params.warmstart_coefficient = 0.0;
         // Contact recycling may leave contact distances stale by up to 0.05 units, which
         // would blur the touching test; the scene is tiny, so always recompute.
         params.contact_recycling = false;
@@ -108,9 +111,7 @@ impl LanderWorld {
         let hull = world.insert_body(
             RigidBodyBuilder::dynamic()
                 .translation(Vector::new(x0, y0))
-                .can_sleep(false)
-                // Box2D sweeps dynamic bodies against static ones (TOI) by default.
-                .ccd_enabled(true),
+                .can_sleep(false),
         );
         let hull_collider = world.colliders.insert_with_parent(
             ColliderBuilder::convex_polyline(hull_points)
@@ -127,21 +128,16 @@ impl LanderWorld {
             hull,
             &mut world.bodies,
         );
-        world.bodies[hull].add_force(Vector::new(initial_force[0], initial_force[1]), true);
 
         let mut legs = [hull; 2];
         let mut leg_colliders = [hull_collider; 2];
-        let mut joints = [ImpulseJointHandle::invalid(); 2];
-        let mut leg_joints = [LegJoint { sign: 1.0 }; 2];
-        let mut references = [0.0; 2];
         for (k, i) in [-1.0f32, 1.0].into_iter().enumerate() {
             let leg_angle = i * 0.05;
             let leg = world.insert_body(
                 RigidBodyBuilder::dynamic()
                     .translation(Vector::new(x0 - i * LEG_AWAY / SCALE, y0))
                     .rotation(leg_angle)
-                    .can_sleep(false)
-                    .ccd_enabled(true),
+                    .can_sleep(false),
             );
             leg_colliders[k] = world.colliders.insert_with_parent(
                 ColliderBuilder::cuboid(LEG_W / SCALE, LEG_H / SCALE)
@@ -160,79 +156,100 @@ impl LanderWorld {
             // pybox2d's `revoluteJointDef` sets the reference angle to the bodies' relative
             // angle at creation (hull 0, leg i * 0.05). rapier measures the joint angle between
             // the two local frames, so rotating the hull's frame by it is the reference angle.
-            // The anchors (hull origin, and a point 20 px aside and 18 px up on the leg) do not
-            // coincide at creation; the joint pulls them together on the first step, as
-            // Box2D's position solver does.
+            // Anchors: the hull's origin, and a point 20 px aside and 18 px up on the leg. In
+            // Box2D they start apart and the solver pulls them together; a multibody starts
+            // with them joined (the leg placed by the joint at angle 0), which is where Box2D
+            // ends up after its first step.
+            // [0.4, 0.9] for the i = -1 leg, [-0.9, -0.4] for the other.
+            let limits = if i < 0.0 {
+                LEG_LIMITS
+            } else {
+                [-LEG_LIMITS[1], -LEG_LIMITS[0]]
+            };
             let joint = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
                 .local_frame1(Pose::new(Vector::ZERO, leg_angle))
                 .local_frame2(Pose::new(
                     Vector::new(i * LEG_AWAY / SCALE, LEG_DOWN / SCALE),
                     0.0,
                 ))
+                .limits(JointAxis::AngX, limits)
                 .motor_model(JointAxis::AngX, MotorModel::ForceBased)
-                .motor_velocity(JointAxis::AngX, 0.3 * i, MOTOR_DAMPING)
+                .motor_velocity(JointAxis::AngX, LEG_MOTOR_SPEED * i, MOTOR_DAMPING)
                 .motor_max_force(JointAxis::AngX, LEG_SPRING_TORQUE)
                 .contacts_enabled(false)
                 .build();
-            joints[k] = world.impulse_joints.insert(hull, leg, joint, true);
-            leg_joints[k] = LegJoint { sign: -i };
-            references[k] = leg_angle;
+            world
+                .multibody_joints
+                .insert(hull, leg, joint, true)
+                .expect("a hull and two legs form a tree");
             legs[k] = leg;
         }
 
-        Self {
+        let mut lander = Self {
             world,
             hull,
             legs,
             ground_collider,
             hull_collider,
             leg_colliders,
-            clear_forces: true,
-            joints,
-            leg_joints,
-            references,
-        }
+            clear_forces: false,
+        };
+        // Box2D applies the force to the hull's centre for the first step and then clears it.
+        // A user force on a multibody link enters the articulated dynamics (a torque would not
+        // be handled faithfully by rapier 0.36's multibody, but this force has none).
+        lander.world.bodies[hull].add_force(Vector::new(initial_force[0], initial_force[1]), true);
+        lander.clear_forces = true;
+        lander
     }
 
-    /// Box2D's `ApplyLinearImpulse(impulse, point, wake=True)` on the hull.
+    fn with_multibody(&mut self, f: impl FnOnce(&mut Multibody, &mut RigidBodySet)) {
+        let link = *self
+            .world
+            .multibody_joints
+            .rigid_body_link(self.hull)
+            .expect("the hull is the multibody's root");
+        let mb = self
+            .world
+            .multibody_joints
+            .get_multibody_mut(link.multibody)
+            .expect("the lander's multibody lives as long as the world");
+        f(mb, &mut self.world.bodies);
+    }
+
+    /// Box2D's `ApplyLinearImpulse(impulse, point, wake=True)` on the hull, as the generalised
+    /// impulse `J^T [p; r x p]` on the multibody. Uses the augmented mass of the last step's
+    /// configuration (rapier computes it while stepping), so call it after the first step:
+    /// Gymnasium's reset takes that step with the engines off.
     pub fn apply_hull_impulse(&mut self, impulse: [f32; 2], point: [f32; 2]) {
-        self.world.bodies[self.hull].apply_impulse_at_point(
-            Vector::new(impulse[0], impulse[1]),
-            Vector::new(point[0], point[1]),
-            true,
-        );
+        let com = self.world.bodies[self.hull].center_of_mass();
+        let r = [point[0] - com.x, point[1] - com.y];
+        let torque = r[0] * impulse[1] - r[1] * impulse[0];
+        let hull = self.hull;
+        let links = &self.world.multibody_joints;
+        let root = links
+            .rigid_body_link(hull)
+            .expect("the hull is the root")
+            .id;
+        self.with_multibody(|mb, bodies| {
+            let generalised = mb
+                .body_jacobian(root)
+                .tr_mul(&na::Vector3::new(impulse[0], impulse[1], torque));
+            let dq = mb
+                .inv_augmented_mass()
+                .solve(&generalised)
+                .expect("the augmented mass matrix is invertible");
+            let mut velocity = mb.generalized_velocity_mut();
+            velocity += dq;
+            mb.update_rigid_bodies(bodies, false);
+        });
     }
 
     /// One `1/FPS` step of the world.
     pub fn step(&mut self) {
-        self.command_leg_motors();
         self.world.step();
         if self.clear_forces {
             self.world.bodies[self.hull].reset_forces(true);
             self.clear_forces = false;
-        }
-    }
-
-    /// Box2D's `GetJointAngle`: the leg's angle relative to the hull, minus the reference.
-    pub fn joint_angle(&self, k: usize) -> f32 {
-        let hull = self.world.bodies[self.hull].rotation().angle();
-        let leg = self.world.bodies[self.legs[k]].rotation().angle();
-        super::wrap_angle(leg - hull - self.references[k])
-    }
-
-    fn command_leg_motors(&mut self) {
-        let dt = self.world.integration_parameters.dt;
-        for k in 0..2 {
-            let cmd = self.leg_joints[k].command(self.joint_angle(k), LEG_SPRING_TORQUE, dt);
-            let joint = self
-                .world
-                .impulse_joints
-                .get_mut(self.joints[k], false)
-                .expect("the leg joints live as long as the world");
-            joint
-                .data
-                .set_motor_velocity(JointAxis::AngX, cmd.speed, MOTOR_DAMPING)
-                .set_motor_max_force(JointAxis::AngX, cmd.max_torque);
         }
     }
 
