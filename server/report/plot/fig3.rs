@@ -64,7 +64,8 @@ fn draw_panel<DB: DrawingBackend>(
         .y_labels(6)
         .x_label_formatter(&x_fmt)
         .y_label_formatter(&y_fmt)
-        .light_line_style(BLACK.mix(0.04))
+        // Major grid lines only: the minor ones crowd three small panels.
+        .light_line_style(TRANSPARENT)
         .bold_line_style(BLACK.mix(0.12))
         .draw()?;
 

@@ -88,6 +88,9 @@ fn padded_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
 
 /// Tick label for large numbers: "150k", "12.5k", "-6k"; small ones as they are.
 fn short_number(v: f64, span: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
     if span >= 5_000.0 {
         let k = v / 1000.0;
         if (k - k.round()).abs() < 1e-9 {
@@ -125,6 +128,7 @@ mod tests {
         assert_eq!(short_number(-6_000.0, 40_000.0), "-6k");
         assert_eq!(short_number(250.0, 1_000.0), "250");
         assert_eq!(short_number(0.5, 1.0), "0.50");
+        assert_eq!(short_number(0.0, 150_000.0), "0");
     }
 
     #[test]
