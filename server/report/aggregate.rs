@@ -93,9 +93,14 @@ pub fn mean_on_grid(curves: &[Vec<(f64, f64)>], grid: &[f64]) -> Curve {
     out
 }
 
+/// The seeds of one method on one task.
+type MethodRuns<'a, R> = (String, Vec<&'a R>);
+
 /// Runs grouped by task, then method, in the paper's panel and legend order.
-fn grouped<R>(runs: &[R], key: impl Fn(&R) -> (Task, &str)) -> Vec<(Task, Vec<(String, Vec<&R>)>)> {
-    let mut by_task: BTreeMap<(usize, Task), BTreeMap<(usize, String), Vec<&R>>> = BTreeMap::new();
+fn grouped<R>(runs: &[R], key: impl Fn(&R) -> (Task, &str)) -> Vec<(Task, Vec<MethodRuns<'_, R>>)> {
+    // Keyed by (rank, name) so that iteration order is the paper's order.
+    type ByMethod<'a, R> = BTreeMap<(usize, String), Vec<&'a R>>;
+    let mut by_task: BTreeMap<(usize, Task), ByMethod<'_, R>> = BTreeMap::new();
     for run in runs {
         let (task, method) = key(run);
         by_task

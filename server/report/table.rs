@@ -7,17 +7,25 @@ use super::aggregate::{Fig3Task, Fig5Task};
 use super::methods::{Fig3Method, display_name, paper_steps, published_fig3, task_title};
 use super::stats::MeanSe;
 
-/// A cumulative reward as the paper prints it: thousands with one decimal ("34.1k") when the
-/// mean is at least a thousand, else a whole number; the error uses the mean's scale.
-pub fn fmt_reward(m: MeanSe) -> String {
+/// A cumulative reward as the paper prints it: in thousands with one decimal ("34.1k") when
+/// `thousands`, else whole numbers; the error in the same unit. One table section uses one unit
+/// (see [`uses_thousands`]) so that its column reads at a glance.
+pub fn fmt_reward(m: MeanSe, thousands: bool) -> String {
     if m.mean.is_nan() {
         return "–".into();
     }
-    if m.mean.abs() >= 1000.0 {
+    if thousands {
         format!("{:.1}k ± {:.1}k", m.mean / 1000.0, m.se / 1000.0)
     } else {
         format!("{:.0} ± {:.0}", m.mean, m.se)
     }
+}
+
+/// Whether a task's rewards are shown in thousands: when any method's mean reaches a thousand.
+pub fn uses_thousands(task: &Fig3Task) -> bool {
+    task.methods
+        .iter()
+        .any(|m| m.final_return.mean.abs() >= 1000.0)
 }
 
 /// A percentage with one decimal and its standard error: "6.2 ± 0.4 %".
@@ -37,7 +45,7 @@ fn fmt_plain(m: MeanSe, decimals: usize) -> String {
 
 /// Steps as "150k" (or the exact number when not a whole thousand).
 fn fmt_steps(steps: u64) -> String {
-    if steps >= 1000 && steps % 1000 == 0 {
+    if steps >= 1000 && steps.is_multiple_of(1000) {
         format!("{}k", steps / 1000)
     } else {
         steps.to_string()
@@ -74,6 +82,7 @@ pub fn fig3_table(tasks: &[Fig3Task]) -> String {
             ours,
             fmt_steps(paper_steps(task.task)),
         );
+        let thousands = uses_thousands(task);
         let mut rows: Vec<(usize, String)> = Vec::new();
         for m in &task.methods {
             let kind = Fig3Method::parse(&m.method);
@@ -84,7 +93,7 @@ pub fn fig3_table(tasks: &[Fig3Task]) -> String {
             let paper = kind.map_or("–".into(), |k| fmt_published(task.task, k));
             let row = format!(
                 "| {name} | {} | {} | {} | {paper} |\n",
-                fmt_reward(m.final_return),
+                fmt_reward(m.final_return, thousands),
                 fmt_pct(m.feedback_pct),
                 m.final_return.n,
             );
