@@ -17,6 +17,8 @@
 //! - [`rl`]: SAC's parts: MLPs on nalgebra with a hand-written backward pass, Adam, losses,
 //!   the tanh-squashed Gaussian policy, the replay buffer.
 //! - [`guidance`]: when to ask (DREF's UCB query rule, EF-p%) and, later, what to ask (DRPL).
+//! - [`report`]: the paper's Figures 3 and 5: the run grid, aggregation over seeds, `table.md`,
+//!   SVG and PNG figures (aggregation and tables are pure; reading runs and drawing are the IO).
 //!
 //! The edge:
 //!
@@ -24,6 +26,7 @@
 
 pub mod cli;
 pub mod guidance;
+pub mod report;
 pub mod rl;
 pub mod scene_graph;
 pub mod sim;

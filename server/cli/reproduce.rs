@@ -1,0 +1,224 @@
+//! `dualrep reproduce fig3|fig5`: runs the paper's experiment grid as `dualrep train` or
+//! `dualrep prefs` child processes, then writes `table.md` and the figure from every finished
+//! run. A grid stopped half-way resumes: finished runs (those with a `summary.json`) are skipped.
+
+mod progress;
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use clap::Args;
+
+use crate::report::grid::{DEFAULT_QUERIES, Figure, GridConfig, RunSpec};
+use crate::report::methods::paper_dref_rate;
+use crate::report::run_files::{is_finished, read_train_summary, run_dir};
+use crate::report::runner::{Outcome, RunStatus, run_grid};
+use crate::report::stats::mean_se;
+use crate::report::write_report;
+use crate::sim::Task;
+
+use self::progress::{Progress, track};
+
+#[derive(Debug, Args)]
+pub struct ReproduceArgs {
+    /// fig3 (evaluative feedback: `dualrep train`) or fig5 (preferences: `dualrep prefs`).
+    pub figure: Figure,
+    /// Comma-separated tasks.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "lunar-lander,reaching,placing"
+    )]
+    pub tasks: Vec<Task>,
+    /// Seeds per method and task (0, 1, ..., N-1).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..))]
+    pub seeds: u64,
+    /// fig3: environment steps per run [default: the paper's, 150k for lunar-lander, 100k
+    /// for the others].
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub steps: Option<u64>,
+    /// fig5: queries per run [default: 40].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub queries: Option<u32>,
+    /// Comma-separated methods [default: fig3 dref,ef-100,ef-50,ef-25,sac,ef-dref; fig5
+    /// drpl,drpl-ss,fragment,full]. `ef-dref` is EF at DREF's measured feedback rate, run once
+    /// DREF's runs on that task have finished.
+    #[arg(long, value_delimiter = ',')]
+    pub methods: Vec<String>,
+    /// Child processes at once [default: the number of CPUs].
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub jobs: Option<u64>,
+    /// A hyper-parameter override passed to every run as `--set KEY=VALUE` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+    /// The grid's directory: runs go to OUT/<task>/<method>/seed<S>/.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Run nothing: write table.md and the figure from the runs already finished in OUT.
+    #[arg(long)]
+    pub report_only: bool,
+    /// The program to run as each child instead of this binary (tests, wrappers).
+    #[arg(long, hide = true)]
+    pub program: Option<PathBuf>,
+}
+
+pub fn run(args: ReproduceArgs) -> anyhow::Result<()> {
+    if args.report_only {
+        if !args.out.is_dir() {
+            bail!("--report-only: {} is not a directory", args.out.display());
+        }
+        return report(args.figure, &args.out);
+    }
+    let config = grid_config(&args)?;
+    let program = match &args.program {
+        Some(p) => p.clone(),
+        None => std::env::current_exe().context("finding the dualrep binary to run")?,
+    };
+    let jobs = args.jobs.map_or_else(
+        || std::thread::available_parallelism().map_or(1, usize::from),
+        |j| j as usize,
+    );
+
+    let progress = Progress::new(config.total_runs());
+    let mut runs = config.initial_runs();
+    if config.wants_matched() && !config.has_dref() {
+        for &task in &config.tasks {
+            let rate = paper_dref_rate(task);
+            progress.line(&format!(
+                "{task}: DREF is not in the grid; EF at DREF's rate runs at the paper's {rate} %"
+            ));
+            runs.extend(config.matched_runs(task, rate));
+        }
+    }
+    let mut dref_ended: HashMap<Task, u64> = HashMap::new();
+    let follow_up = |outcome: &Outcome| -> Vec<RunSpec> {
+        if !config.wants_matched() || outcome.spec.method != "dref" {
+            return Vec::new();
+        }
+        let task = outcome.spec.task;
+        let ended = dref_ended.entry(task).or_default();
+        *ended += 1;
+        if *ended < config.seeds {
+            return Vec::new();
+        }
+        let rate = measured_dref_rate(&config, task).unwrap_or_else(|| {
+            let rate = paper_dref_rate(task);
+            progress.line(&format!(
+                "{task}: no DREF run finished; EF at DREF's rate runs at the paper's {rate} %"
+            ));
+            rate
+        });
+        progress.line(&format!(
+            "{task}: DREF asked on {rate:.2} % of steps; queuing EF at that rate"
+        ));
+        config.matched_runs(task, rate)
+    };
+    let mut running = Vec::new();
+    let outcomes = run_grid(&program, runs, jobs, follow_up, |event| {
+        track(&mut running, &event);
+        progress.event(&event, &running);
+    });
+    progress.finish();
+
+    let failed: Vec<&Outcome> = outcomes
+        .iter()
+        .filter(|o| matches!(o.status, RunStatus::Failed(_)))
+        .collect();
+    let ran = outcomes
+        .iter()
+        .filter(|o| o.status != RunStatus::Skipped)
+        .count();
+    println!(
+        "{} runs: {} ran, {} already finished, {} failed",
+        outcomes.len(),
+        ran,
+        outcomes.len() - ran,
+        failed.len()
+    );
+    report(config.figure, &config.out)?;
+    if !failed.is_empty() {
+        for o in &failed {
+            if let RunStatus::Failed(why) = &o.status {
+                eprintln!("failed: {}: {why}", o.spec.label());
+            }
+        }
+        bail!(
+            "{} of {} runs failed (their stderr.log is in their run directory); run the same command again to retry them",
+            failed.len(),
+            outcomes.len()
+        );
+    }
+    Ok(())
+}
+
+/// The grid the arguments describe, checked before anything runs.
+fn grid_config(args: &ReproduceArgs) -> anyhow::Result<GridConfig> {
+    match (args.figure, args.steps, args.queries) {
+        (Figure::Fig5, Some(_), _) => bail!("--steps is for fig3; fig5 runs take --queries"),
+        (Figure::Fig3, _, Some(_)) => bail!("--queries is for fig5; fig3 runs take --steps"),
+        _ => {}
+    }
+    if let Some(bad) = args.sets.iter().find(|kv| !kv.contains('=')) {
+        bail!("--set {bad:?}: expected KEY=VALUE");
+    }
+    let mut methods: Vec<String> = if args.methods.is_empty() {
+        args.figure
+            .default_methods()
+            .iter()
+            .map(|m| m.to_string())
+            .collect()
+    } else {
+        args.methods.iter().map(|m| m.trim().to_string()).collect()
+    };
+    dedup_keep_order(&mut methods);
+    let mut tasks = args.tasks.clone();
+    dedup_keep_order(&mut tasks);
+    let config = GridConfig {
+        figure: args.figure,
+        tasks,
+        seeds: args.seeds,
+        steps: args.steps,
+        queries: args.queries.unwrap_or(DEFAULT_QUERIES),
+        methods,
+        sets: args.sets.clone(),
+        out: args.out.clone(),
+    };
+    config.validate().map_err(anyhow::Error::msg)?;
+    Ok(config)
+}
+
+fn dedup_keep_order<T: PartialEq + Clone>(items: &mut Vec<T>) {
+    let mut seen: Vec<T> = Vec::with_capacity(items.len());
+    items.retain(|x| {
+        let new = !seen.contains(x);
+        if new {
+            seen.push(x.clone());
+        }
+        new
+    });
+}
+
+/// DREF's mean feedback percentage over its finished seeds on `task`, read from their
+/// summaries; `None` when none finished (or none could be read).
+fn measured_dref_rate(config: &GridConfig, task: Task) -> Option<f64> {
+    let rates: Vec<f64> = (0..config.seeds)
+        .map(|seed| run_dir(&config.out, task, "dref", seed))
+        .filter(|dir| is_finished(dir))
+        .filter_map(|dir| read_train_summary(&dir).ok())
+        .map(|s| 100.0 * s.feedback_fraction)
+        .collect();
+    (!rates.is_empty()).then(|| mean_se(&rates).mean)
+}
+
+fn report(figure: Figure, out: &Path) -> anyhow::Result<()> {
+    let written = write_report(figure, out)?;
+    println!(
+        "{} finished runs -> {}, {}, {}",
+        written.runs,
+        written.table.display(),
+        written.svg.display(),
+        written.png.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,195 @@
+//! The experiment grid of a figure, pure: which runs, where their files go, and the exact
+//! `dualrep train` / `dualrep prefs` command line of each.
+
+use std::path::PathBuf;
+
+use super::methods::{matched_ef_method, paper_steps};
+use super::run_files::run_dir;
+use crate::sim::Task;
+
+/// Which of the paper's figures a grid reproduces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Figure {
+    /// Evaluative feedback: DREF against EF-p% and SAC (`dualrep train`).
+    Fig3,
+    /// Preference learning: DRPL against its baselines (`dualrep prefs`).
+    Fig5,
+}
+
+impl Figure {
+    /// The file stem of the figure ("fig3").
+    pub fn stem(self) -> &'static str {
+        match self {
+            Figure::Fig3 => "fig3",
+            Figure::Fig5 => "fig5",
+        }
+    }
+
+    /// The methods run when `--methods` is not given, in the paper's legend order.
+    pub fn default_methods(self) -> &'static [&'static str] {
+        match self {
+            Figure::Fig3 => &["dref", "ef-100", "ef-50", "ef-25", "sac", MATCHED_EF],
+            Figure::Fig5 => &["drpl", "drpl-ss", "fragment", "full"],
+        }
+    }
+}
+
+/// The grid's name for "EF at DREF's rate": it becomes `ef-<p>` per task once p is known.
+pub const MATCHED_EF: &str = "ef-dref";
+
+/// Queries per preference run (algorithms.md, section 3).
+pub const DEFAULT_QUERIES: u32 = 40;
+
+/// Everything that decides a grid's runs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GridConfig {
+    pub figure: Figure,
+    pub tasks: Vec<Task>,
+    /// Seeds 0, 1, ..., seeds - 1.
+    pub seeds: u64,
+    /// Environment steps of every train run; `None` for the paper's per task.
+    pub steps: Option<u64>,
+    pub queries: u32,
+    pub methods: Vec<String>,
+    /// `key=value` overrides passed to every child as `--set key=value`.
+    pub sets: Vec<String>,
+    pub out: PathBuf,
+}
+
+/// One child process of the grid.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunSpec {
+    pub task: Task,
+    pub method: String,
+    pub seed: u64,
+    pub dir: PathBuf,
+    /// Arguments after the program name.
+    pub args: Vec<String>,
+}
+
+impl RunSpec {
+    /// "reaching/dref/seed3", for progress lines.
+    pub fn label(&self) -> String {
+        format!("{}/{}/seed{}", self.task.id(), self.method, self.seed)
+    }
+}
+
+impl GridConfig {
+    /// Checks the method names against what `train` and `prefs` accept, so that a typo fails
+    /// before hours of runs rather than as a wall of failed children.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.tasks.is_empty() || self.seeds == 0 || self.methods.is_empty() {
+            return Err("a grid needs at least one task, one seed and one method".into());
+        }
+        for m in &self.methods {
+            let ok = match self.figure {
+                Figure::Fig3 => {
+                    matches!(m.as_str(), "dref" | "sac" | MATCHED_EF)
+                        || m.strip_prefix("ef-")
+                            .and_then(|p| p.parse::<f64>().ok())
+                            .is_some_and(|p| (0.0..=100.0).contains(&p))
+                }
+                Figure::Fig5 => Figure::Fig5.default_methods().contains(&m.as_str()),
+            };
+            if !ok {
+                let known = match self.figure {
+                    Figure::Fig3 => "dref, sac, ef-<p> (0 <= p <= 100), ef-dref",
+                    Figure::Fig5 => "drpl, drpl-ss, fragment, full",
+                };
+                return Err(format!(
+                    "unknown method {m:?} for {}: expected {known}",
+                    self.figure.stem()
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Environment steps of a train run on `task`.
+    pub fn steps_for(&self, task: Task) -> u64 {
+        self.steps.unwrap_or_else(|| paper_steps(task))
+    }
+
+    /// Whether the grid runs "EF at DREF's rate".
+    pub fn wants_matched(&self) -> bool {
+        self.figure == Figure::Fig3 && self.methods.iter().any(|m| m == MATCHED_EF)
+    }
+
+    /// Whether DREF itself is in the grid (else the matched rate is the paper's).
+    pub fn has_dref(&self) -> bool {
+        self.figure == Figure::Fig3 && self.methods.iter().any(|m| m == "dref")
+    }
+
+    /// The run of `method` (a concrete name, never [`MATCHED_EF`]) on `task` with `seed`.
+    pub fn spec(&self, task: Task, method: &str, seed: u64) -> RunSpec {
+        let dir = run_dir(&self.out, task, method, seed);
+        let (command, budget_flag, budget) = match self.figure {
+            Figure::Fig3 => ("train", "--steps", self.steps_for(task).to_string()),
+            Figure::Fig5 => ("prefs", "--queries", self.queries.to_string()),
+        };
+        let mut args: Vec<String> = [
+            command,
+            "--task",
+            task.id(),
+            "--method",
+            method,
+            budget_flag,
+            &budget,
+            "--seed",
+            &seed.to_string(),
+            "--out",
+        ]
+        .map(str::to_owned)
+        .into();
+        args.push(dir.to_string_lossy().into_owned());
+        for kv in &self.sets {
+            args.push("--set".into());
+            args.push(kv.clone());
+        }
+        RunSpec {
+            task,
+            method: method.into(),
+            seed,
+            dir,
+            args,
+        }
+    }
+
+    /// Every run that can start now: all but "EF at DREF's rate", DREF's runs first so that
+    /// the matched runs, which wait for them, can start as early as possible.
+    pub fn initial_runs(&self) -> Vec<RunSpec> {
+        let mut methods: Vec<&str> = self
+            .methods
+            .iter()
+            .map(String::as_str)
+            .filter(|m| *m != MATCHED_EF)
+            .collect();
+        methods.sort_by_key(|m| *m != "dref");
+        let mut runs = Vec::new();
+        for method in methods {
+            for &task in &self.tasks {
+                for seed in 0..self.seeds {
+                    runs.push(self.spec(task, method, seed));
+                }
+            }
+        }
+        runs
+    }
+
+    /// The runs of "EF at DREF's rate" on `task` at `rate_pct` percent.
+    pub fn matched_runs(&self, task: Task, rate_pct: f64) -> Vec<RunSpec> {
+        let method = matched_ef_method(rate_pct);
+        (0..self.seeds)
+            .map(|seed| self.spec(task, &method, seed))
+            .collect()
+    }
+
+    /// How many runs the whole grid has, the matched ones included.
+    pub fn total_runs(&self) -> usize {
+        self.tasks.len() * self.methods.len() * self.seeds as usize
+    }
+}
+
+#[cfg(test)]
+#[path = "grid_tests.rs"]
+mod tests;

@@ -1,0 +1,209 @@
+//! Method names as the CLI spells them (`dref`, `ef-50`, `drpl-ss`, ...) mapped to the paper's
+//! names, its order of legend entries, and the published Figure 3 numbers (algorithms.md,
+//! section 2) that the table prints beside ours.
+
+use crate::sim::Task;
+
+/// The methods of Figure 3 in the paper's legend order.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Fig3Method {
+    Dref,
+    Ef100,
+    Ef50,
+    Ef25,
+    Sac,
+    /// EF at DREF's measured feedback rate, in percent: `ef-<p>` for any p other than the three
+    /// fixed baselines. The grid names it after the rate it measured, so the name is the rule.
+    EfMatched(f64),
+}
+
+impl Fig3Method {
+    /// The method behind a CLI name, or `None` for a name Figure 3 does not know.
+    pub fn parse(method: &str) -> Option<Self> {
+        Some(match method {
+            "dref" => Self::Dref,
+            "ef-100" => Self::Ef100,
+            "ef-50" => Self::Ef50,
+            "ef-25" => Self::Ef25,
+            "sac" => Self::Sac,
+            other => Self::EfMatched(other.strip_prefix("ef-")?.parse().ok()?),
+        })
+    }
+
+    /// Position in the legend and the table: the paper's order, the matched-rate baseline last.
+    pub fn rank(self) -> usize {
+        match self {
+            Self::Dref => 0,
+            Self::Ef100 => 1,
+            Self::Ef50 => 2,
+            Self::Ef25 => 3,
+            Self::Sac => 4,
+            Self::EfMatched(_) => 5,
+        }
+    }
+
+    /// Whether the method's name already says how much feedback it gets (so a legend need not).
+    pub fn rate_in_name(self) -> bool {
+        !matches!(self, Self::Dref)
+    }
+}
+
+/// The paper's name of a Figure 3 or Figure 5 method; unknown names are shown as given.
+pub fn display_name(method: &str) -> String {
+    match method {
+        "drpl" => return "DRPL".into(),
+        "drpl-ss" => return "DRPL-SS".into(),
+        "fragment" => return "Random fragment".into(),
+        "full" => return "Full trajectory".into(),
+        _ => {}
+    }
+    match Fig3Method::parse(method) {
+        Some(Fig3Method::Dref) => "DREF".into(),
+        Some(Fig3Method::Sac) => "SAC".into(),
+        Some(_) => format!("EF-{}%", &method["ef-".len()..]),
+        None => method.into(),
+    }
+}
+
+/// Sort key that puts methods in the paper's order, unknown ones after, alphabetically.
+pub fn order_key(method: &str) -> (usize, String) {
+    let rank = match method {
+        "drpl" => 0,
+        "drpl-ss" => 1,
+        "fragment" => 2,
+        "full" => 3,
+        _ => Fig3Method::parse(method).map_or(100, Fig3Method::rank),
+    };
+    (rank, method.to_string())
+}
+
+/// The paper's panel order: Lunar-Lander, Reaching-Sim, Placing-Sim.
+pub fn task_rank(task: Task) -> usize {
+    match task {
+        Task::LunarLander => 0,
+        Task::Reaching => 1,
+        Task::Placing => 2,
+    }
+}
+
+/// The paper's panel title of a task.
+pub fn task_title(task: Task) -> &'static str {
+    match task {
+        Task::LunarLander => "Lunar-Lander",
+        Task::Reaching => "Reaching-Sim",
+        Task::Placing => "Placing-Sim",
+    }
+}
+
+/// Environment steps of the published curves (algorithms.md, section 1).
+pub fn paper_steps(task: Task) -> u64 {
+    match task {
+        Task::LunarLander => 150_000,
+        Task::Reaching | Task::Placing => 100_000,
+    }
+}
+
+/// DREF's feedback rate in percent as the paper's text states it (section 4.1), used for
+/// "EF at DREF's rate" when DREF itself is not in the grid.
+pub fn paper_dref_rate(task: Task) -> f64 {
+    match task {
+        Task::LunarLander => 6.2,
+        Task::Reaching => 1.6,
+        Task::Placing => 8.4,
+    }
+}
+
+/// A published Figure 3 result: final cumulative reward in thousands, and DREF's feedback rate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Published {
+    pub cumulative_k: f64,
+    pub feedback_pct: Option<f64>,
+}
+
+/// The published value of `method` on `task` (algorithms.md, section 2, "What the published
+/// runs show").
+pub fn published_fig3(task: Task, method: Fig3Method) -> Published {
+    // Columns: DREF, EF-100, EF-50, EF-25, SAC, EF at DREF's rate.
+    let (row, dref_rate) = match task {
+        Task::LunarLander => ([34.1, 29.1, 24.2, 18.7, 17.6, -6.0], 6.3),
+        Task::Reaching => ([11.4, 11.4, 10.4, 9.6, 6.2, 10.2], 1.6),
+        Task::Placing => ([43.3, 43.6, 23.4, 23.7, 16.4, 10.1], 8.4),
+    };
+    Published {
+        cumulative_k: row[method.rank()],
+        feedback_pct: (method == Fig3Method::Dref).then_some(dref_rate),
+    }
+}
+
+/// The name under which the grid runs EF at a rate of `pct` percent: `ef-6.2`, `ef-0.35`.
+/// Two decimals at most, trailing zeros dropped, never one of the fixed baselines' names.
+pub fn matched_ef_method(pct: f64) -> String {
+    let mut s = format!("{pct:.2}");
+    while s.ends_with('0') {
+        s.pop();
+    }
+    if s.ends_with('.') {
+        s.pop();
+    }
+    // A rate that rounds to 100, 50 or 25 must still read as the matched baseline.
+    if matches!(s.as_str(), "100" | "50" | "25") {
+        s.push_str(".0");
+    }
+    format!("ef-{s}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn report_method_names_parse_and_display() {
+        assert_eq!(Fig3Method::parse("dref"), Some(Fig3Method::Dref));
+        assert_eq!(Fig3Method::parse("ef-50"), Some(Fig3Method::Ef50));
+        assert_eq!(
+            Fig3Method::parse("ef-6.2"),
+            Some(Fig3Method::EfMatched(6.2))
+        );
+        assert_eq!(Fig3Method::parse("drpl"), None);
+        assert_eq!(Fig3Method::parse("ef-x"), None);
+        assert_eq!(display_name("ef-100"), "EF-100%");
+        assert_eq!(display_name("ef-6.2"), "EF-6.2%");
+        assert_eq!(display_name("drpl-ss"), "DRPL-SS");
+        assert_eq!(display_name("mystery"), "mystery");
+    }
+
+    #[test]
+    fn report_methods_sort_in_the_papers_order() {
+        let mut m = vec!["sac", "ef-6.2", "ef-25", "dref", "zz", "ef-100", "ef-50"];
+        m.sort_by_key(|s| order_key(s));
+        assert_eq!(
+            m,
+            ["dref", "ef-100", "ef-50", "ef-25", "sac", "ef-6.2", "zz"]
+        );
+    }
+
+    #[test]
+    fn report_matched_method_names_round_trip() {
+        assert_eq!(matched_ef_method(6.2), "ef-6.2");
+        assert_eq!(matched_ef_method(6.249), "ef-6.25");
+        assert_eq!(matched_ef_method(0.0), "ef-0");
+        assert_eq!(matched_ef_method(50.001), "ef-50.0");
+        assert_eq!(
+            Fig3Method::parse(&matched_ef_method(1.6)),
+            Some(Fig3Method::EfMatched(1.6))
+        );
+    }
+
+    #[test]
+    fn report_published_values_match_algorithms_md() {
+        let ll = published_fig3(Task::LunarLander, Fig3Method::Dref);
+        assert_eq!(ll.cumulative_k, 34.1);
+        assert_eq!(ll.feedback_pct, Some(6.3));
+        let p = published_fig3(Task::Placing, Fig3Method::EfMatched(8.4));
+        assert_eq!((p.cumulative_k, p.feedback_pct), (10.1, None));
+        assert_eq!(
+            published_fig3(Task::Reaching, Fig3Method::Sac).cumulative_k,
+            6.2
+        );
+    }
+}

@@ -1,0 +1,130 @@
+//! Figure 3: cumulative reward against environment steps, one line per method with a shaded
+//! standard-error band, the legend naming each method with its mean feedback percentage where
+//! the name does not already say it ("DREF (6.2 %)").
+
+use std::path::Path;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use super::{
+    DESC_PX, LEGEND_PX, TICK_PX, TITLE_PX, figure_size, method_color, padded_range, prepare,
+    short_number, text,
+};
+use crate::report::aggregate::{Fig3Method as Row, Fig3Task};
+use crate::report::font;
+use crate::report::methods::{Fig3Method, display_name, task_title};
+
+/// The legend entry of a method: its paper name, plus its measured feedback percentage for
+/// methods whose name does not fix it (DREF). SAC gets none: it never asks.
+pub fn legend_label(row: &Row) -> String {
+    let name = display_name(&row.method);
+    let shows_rate = match Fig3Method::parse(&row.method) {
+        Some(kind) => !kind.rate_in_name(),
+        None => row.feedback_pct.mean > 0.0,
+    };
+    if shows_rate && row.feedback_pct.mean.is_finite() {
+        format!("{name} ({:.1} %)", row.feedback_pct.mean)
+    } else {
+        name
+    }
+}
+
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    task: &Fig3Task,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let x_max = task
+        .methods
+        .iter()
+        .map(|m| m.steps)
+        .max()
+        .unwrap_or(1)
+        .max(1) as f64;
+    let (y_lo, y_hi) = padded_range(task.methods.iter().flat_map(|m| {
+        let c = &m.curve;
+        c.mean.iter().zip(&c.se).flat_map(|(m, s)| [m - s, m + s])
+    }));
+    let mut chart = ChartBuilder::on(area)
+        .caption(task_title(task.task), text(TITLE_PX))
+        .margin(12)
+        .x_label_area_size(48)
+        .y_label_area_size(64)
+        .build_cartesian_2d(0.0..x_max, y_lo..y_hi)?;
+    let y_span = y_hi - y_lo;
+    let x_fmt = |x: &f64| short_number(*x, x_max);
+    let y_fmt = |y: &f64| short_number(*y, y_span);
+    chart
+        .configure_mesh()
+        .x_desc("Environment steps")
+        .y_desc("Cumulative reward")
+        .axis_desc_style(text(DESC_PX))
+        .label_style(text(TICK_PX))
+        .x_labels(6)
+        .y_labels(6)
+        .x_label_formatter(&x_fmt)
+        .y_label_formatter(&y_fmt)
+        // Major grid lines only: the minor ones crowd three small panels.
+        .light_line_style(TRANSPARENT)
+        .bold_line_style(BLACK.mix(0.12))
+        .draw()?;
+
+    // Bands first, so that no line is hidden under another method's band.
+    for row in &task.methods {
+        let c = &row.curve;
+        let color = method_color(&row.method);
+        let upper = c.x.iter().zip(c.mean.iter().zip(&c.se));
+        let mut outline: Vec<(f64, f64)> = upper.clone().map(|(x, (m, s))| (*x, m + s)).collect();
+        outline.extend(upper.rev().map(|(x, (m, s))| (*x, m - s)));
+        chart.draw_series(std::iter::once(Polygon::new(
+            outline,
+            color.mix(0.18).filled(),
+        )))?;
+    }
+    for row in &task.methods {
+        let color = method_color(&row.method);
+        let points = row
+            .curve
+            .x
+            .iter()
+            .copied()
+            .zip(row.curve.mean.iter().copied());
+        chart
+            .draw_series(LineSeries::new(points, color.stroke_width(2)))?
+            .label(legend_label(row))
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(3))
+            });
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .label_font(text(LEGEND_PX))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK.mix(0.3))
+        .draw()?;
+    Ok(())
+}
+
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    tasks: &[Fig3Task],
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    prepare(root, tasks.len())?;
+    if tasks.is_empty() {
+        return Ok(());
+    }
+    for (area, task) in root.split_evenly((1, tasks.len())).iter().zip(tasks) {
+        draw_panel(area, task)?;
+    }
+    root.present()
+}
+
+/// Draws Figure 3 from aggregated runs into `svg` and `png`.
+pub fn write_fig3(tasks: &[Fig3Task], svg: &Path, png: &Path) -> anyhow::Result<()> {
+    font::ensure_registered();
+    let size = figure_size(tasks.len());
+    draw(&SVGBackend::new(svg, size).into_drawing_area(), tasks)?;
+    draw(&BitMapBackend::new(png, size).into_drawing_area(), tasks)?;
+    Ok(())
+}

@@ -1,0 +1,125 @@
+//! Figure 5: alignment against the number of queries, one line per method with standard-error
+//! bars at every query.
+
+use std::path::Path;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use super::{
+    DESC_PX, LEGEND_PX, TICK_PX, TITLE_PX, figure_size, method_color, padded_range, prepare, text,
+};
+use crate::report::aggregate::Fig5Task;
+use crate::report::font;
+use crate::report::methods::{display_name, task_title};
+
+/// Top of the alignment axis: a cosine never exceeds 1, so the band above it holds the legend
+/// without hiding any curve.
+const Y_TOP: f64 = 1.3;
+
+/// Horizontal shift between methods' error bars, in queries, so that bars at the same query do
+/// not sit on top of each other.
+const DODGE: f64 = 0.18;
+
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    task: &Fig5Task,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let x_max = task
+        .methods
+        .iter()
+        .filter_map(|m| m.curve.x.last().copied())
+        .fold(1.0f64, f64::max);
+    let (y_lo, y_hi) = padded_range(
+        task.methods
+            .iter()
+            .flat_map(|m| {
+                m.curve
+                    .mean
+                    .iter()
+                    .zip(&m.curve.se)
+                    .flat_map(|(m, s)| [m - s, m + s])
+            })
+            // Alignment is a cosine: always show the top of its scale.
+            .chain([1.0]),
+    );
+    let mut chart = ChartBuilder::on(area)
+        .caption(task_title(task.task), text(TITLE_PX))
+        .margin(12)
+        .x_label_area_size(48)
+        .y_label_area_size(56)
+        .build_cartesian_2d(0.0..x_max + 1.0, y_lo..Y_TOP.max(y_hi))?;
+    let x_fmt = |x: &f64| format!("{x:.0}");
+    // No tick labels above 1: that band is the legend's.
+    let y_fmt = |y: &f64| {
+        if *y > 1.0 + 1e-9 {
+            String::new()
+        } else {
+            format!("{y:.1}")
+        }
+    };
+    chart
+        .configure_mesh()
+        .x_desc("Number of queries")
+        .y_desc("Alignment")
+        .axis_desc_style(text(DESC_PX))
+        .label_style(text(TICK_PX))
+        .x_labels(8)
+        .y_labels(8)
+        .x_label_formatter(&x_fmt)
+        .y_label_formatter(&y_fmt)
+        // Major grid lines only: the minor ones crowd three small panels.
+        .light_line_style(TRANSPARENT)
+        .bold_line_style(BLACK.mix(0.12))
+        .draw()?;
+
+    let k = task.methods.len() as f64;
+    for (i, row) in task.methods.iter().enumerate() {
+        let color = method_color(&row.method);
+        let shift = (i as f64 - (k - 1.0) / 2.0) * DODGE;
+        let c = &row.curve;
+        let points = || c.x.iter().zip(&c.mean).map(move |(x, m)| (x + shift, *m));
+        chart.draw_series(c.x.iter().zip(c.mean.iter().zip(&c.se)).map(|(x, (m, s))| {
+            ErrorBar::new_vertical(x + shift, m - s, *m, m + s, color.stroke_width(1), 5)
+        }))?;
+        chart
+            .draw_series(LineSeries::new(points(), color.stroke_width(2)))?
+            .label(display_name(&row.method))
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(3))
+            });
+        chart.draw_series(points().map(|p| Circle::new(p, 2, color.filled())))?;
+    }
+    chart
+        .configure_series_labels()
+        // Alignment starts low and rises: the upper left is the corner curves reach last.
+        .position(SeriesLabelPosition::UpperLeft)
+        .label_font(text(LEGEND_PX))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK.mix(0.3))
+        .draw()?;
+    Ok(())
+}
+
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    tasks: &[Fig5Task],
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    prepare(root, tasks.len())?;
+    if tasks.is_empty() {
+        return Ok(());
+    }
+    for (area, task) in root.split_evenly((1, tasks.len())).iter().zip(tasks) {
+        draw_panel(area, task)?;
+    }
+    root.present()
+}
+
+/// Draws Figure 5 from aggregated runs into `svg` and `png`.
+pub fn write_fig5(tasks: &[Fig5Task], svg: &Path, png: &Path) -> anyhow::Result<()> {
+    font::ensure_registered();
+    let size = figure_size(tasks.len());
+    draw(&SVGBackend::new(svg, size).into_drawing_area(), tasks)?;
+    draw(&BitMapBackend::new(png, size).into_drawing_area(), tasks)?;
+    Ok(())
+}

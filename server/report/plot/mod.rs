@@ -1,0 +1,141 @@
+//! The paper-style figures, drawn with plotters into SVG and PNG from the same code.
+//!
+//! Each figure is one row of panels, one per task in the paper's order. The drawing functions
+//! are generic over the plotters backend and take only aggregated numbers; the public `write_*`
+//! functions are the only place that touches files (the two paths they are given).
+
+mod fig3;
+mod fig5;
+
+pub use fig3::write_fig3;
+pub use fig5::write_fig5;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use super::methods::order_key;
+
+/// Pixels of one panel; a figure is `tasks` panels side by side.
+pub const PANEL_SIZE: (u32, u32) = (560, 440);
+
+/// Font sizes in pixels: panel titles, axis descriptions, tick labels, legend.
+const TITLE_PX: u32 = 24;
+const DESC_PX: u32 = 18;
+const TICK_PX: u32 = 15;
+const LEGEND_PX: u32 = 15;
+
+/// matplotlib's "tab10" colours: what readers of the paper's figures are used to.
+const TAB10: [RGBColor; 10] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+
+/// A method's colour: fixed by its place in the paper's legend (so DREF and DRPL are blue, as in
+/// the paper, and a method keeps its colour across panels); unknown methods share the rest.
+fn method_color(method: &str) -> RGBColor {
+    let (rank, name) = order_key(method);
+    if rank < 6 {
+        return TAB10[rank];
+    }
+    let spread = name
+        .bytes()
+        .fold(0usize, |h, b| h.wrapping_mul(31) + b as usize);
+    TAB10[6 + spread % 4]
+}
+
+/// Figure size for `panels` panels (at least one, so an empty grid still makes a figure).
+fn figure_size(panels: usize) -> (u32, u32) {
+    (PANEL_SIZE.0 * panels.max(1) as u32, PANEL_SIZE.1)
+}
+
+/// Fills the figure white and, when there is nothing to plot, says so instead of leaving a
+/// blank image that looks like a rendering bug.
+fn prepare<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    panels: usize,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    root.fill(&WHITE)?;
+    if panels == 0 {
+        let (w, h) = root.dim_in_pixel();
+        let style = TextStyle::from((FontFamily::SansSerif, DESC_PX).into_font())
+            .pos(Pos::new(HPos::Center, VPos::Center));
+        root.draw_text("no finished runs yet", &style, (w as i32 / 2, h as i32 / 2))?;
+    }
+    Ok(())
+}
+
+/// Axis range that holds `values` with 5 % headroom, always including 0 (a cumulative reward or
+/// an alignment is read against zero) and never empty.
+fn padded_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite())
+        .fold((0.0f64, 0.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    if hi - lo <= f64::EPSILON {
+        return (lo - 0.5, hi + 1.0);
+    }
+    let pad = 0.05 * (hi - lo);
+    (if lo < 0.0 { lo - pad } else { lo }, hi + pad)
+}
+
+/// Tick label for large numbers: "150k", "12.5k", "-6k"; small ones as they are.
+fn short_number(v: f64, span: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    if span >= 5_000.0 {
+        let k = v / 1000.0;
+        if (k - k.round()).abs() < 1e-9 {
+            format!("{k:.0}k")
+        } else {
+            format!("{k:.1}k")
+        }
+    } else if span >= 10.0 {
+        format!("{v:.0}")
+    } else {
+        format!("{v:.2}")
+    }
+}
+
+fn text(px: u32) -> TextStyle<'static> {
+    TextStyle::from((FontFamily::SansSerif, px).into_font())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn report_ranges_include_zero_and_pad() {
+        assert_eq!(padded_range([10.0, 20.0].into_iter()), (0.0, 21.0));
+        let (lo, hi) = padded_range([-10.0, 10.0, f64::NAN].into_iter());
+        assert!((lo + 11.0).abs() < 1e-9 && (hi - 11.0).abs() < 1e-9);
+        assert_eq!(padded_range(std::iter::empty()), (-0.5, 1.0));
+    }
+
+    #[test]
+    fn report_tick_labels_are_short() {
+        assert_eq!(short_number(150_000.0, 150_000.0), "150k");
+        assert_eq!(short_number(12_500.0, 40_000.0), "12.5k");
+        assert_eq!(short_number(-6_000.0, 40_000.0), "-6k");
+        assert_eq!(short_number(250.0, 1_000.0), "250");
+        assert_eq!(short_number(0.5, 1.0), "0.50");
+        assert_eq!(short_number(0.0, 150_000.0), "0");
+    }
+
+    #[test]
+    fn report_known_methods_keep_the_papers_colours() {
+        assert_eq!(method_color("dref"), TAB10[0]);
+        assert_eq!(method_color("drpl"), TAB10[0]);
+        assert_eq!(method_color("sac"), TAB10[4]);
+        assert_eq!(method_color("something"), method_color("something"));
+    }
+}

@@ -1,0 +1,210 @@
+//! Reading the files that `dualrep train` and `dualrep prefs` leave in a run directory, and
+//! finding the finished runs of a grid laid out as `DIR/<task>/<method>/seed<S>/`.
+//!
+//! This is the report's only reading IO; everything downstream works on the plain structs here.
+//! The summaries are read leniently (unknown fields ignored, the non-essential ones optional),
+//! because `train` and `prefs` may add fields and only "at least" these are promised.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use serde::Deserialize;
+
+use crate::sim::Task;
+
+/// The file whose presence marks a run as finished (written last by `train` and `prefs`).
+pub const SUMMARY_FILE: &str = "summary.json";
+
+/// One row of `metrics.csv`: one finished episode.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+pub struct EpisodeRow {
+    pub step: u64,
+    pub episode: u64,
+    #[serde(rename = "return")]
+    pub episode_return: f64,
+    pub cumulative_return: f64,
+    pub feedback_count: u64,
+    /// Share of environment steps so far with feedback, in [0, 1].
+    pub feedback_fraction: f64,
+}
+
+/// `summary.json` of a `train` run.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+pub struct TrainSummary {
+    pub task: String,
+    pub method: String,
+    pub seed: u64,
+    pub steps: u64,
+    pub cumulative_return: f64,
+    pub feedback_count: u64,
+    /// In [0, 1]; the report shows it as a percentage.
+    pub feedback_fraction: f64,
+    pub final_mean_return: f64,
+    #[serde(default)]
+    pub wall_seconds: Option<f64>,
+    #[serde(default)]
+    pub updates_per_second: Option<f64>,
+}
+
+/// One row of `alignment.csv`: the belief after a query.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+pub struct AlignmentRow {
+    pub query: u32,
+    pub alignment: f64,
+    pub alignment_of_mean: f64,
+}
+
+/// `summary.json` of a `prefs` run.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+pub struct PrefsSummary {
+    pub task: String,
+    pub method: String,
+    pub seed: u64,
+    pub queries: u32,
+    pub final_alignment: f64,
+    #[serde(default)]
+    pub mean_segment_length: Option<f64>,
+    #[serde(default)]
+    pub belief_update_ms_median: Option<f64>,
+}
+
+/// Where a run sits in the grid. Task and method come from the directory names, which the
+/// runner chose, so that grouping does not depend on how a child spells its own method.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct RunKey {
+    pub task: Task,
+    pub method: String,
+    pub seed: u64,
+}
+
+/// A finished `train` run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrainRun {
+    pub key: RunKey,
+    pub episodes: Vec<EpisodeRow>,
+    pub summary: TrainSummary,
+}
+
+/// A finished `prefs` run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrefsRun {
+    pub key: RunKey,
+    pub alignment: Vec<AlignmentRow>,
+    pub summary: PrefsSummary,
+}
+
+/// The directory of one run in a grid.
+pub fn run_dir(root: &Path, task: Task, method: &str, seed: u64) -> PathBuf {
+    root.join(task.id())
+        .join(method)
+        .join(format!("seed{seed}"))
+}
+
+/// Whether `dir` holds a finished run.
+pub fn is_finished(dir: &Path) -> bool {
+    dir.join(SUMMARY_FILE).is_file()
+}
+
+fn read_csv<T: for<'de> Deserialize<'de>>(path: &Path) -> anyhow::Result<Vec<T>> {
+    let mut reader =
+        csv::Reader::from_path(path).with_context(|| format!("opening {}", path.display()))?;
+    reader
+        .deserialize()
+        .collect::<Result<Vec<T>, _>>()
+        .with_context(|| format!("reading {}", path.display()))
+}
+
+fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> anyhow::Result<T> {
+    let text = fs::read_to_string(path).with_context(|| format!("opening {}", path.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))
+}
+
+/// Reads just `summary.json` of a finished `train` run.
+pub fn read_train_summary(dir: &Path) -> anyhow::Result<TrainSummary> {
+    read_json(&dir.join(SUMMARY_FILE))
+}
+
+/// Reads `metrics.csv` and `summary.json` of a finished `train` run.
+pub fn read_train_run(key: RunKey, dir: &Path) -> anyhow::Result<TrainRun> {
+    Ok(TrainRun {
+        key,
+        episodes: read_csv(&dir.join("metrics.csv"))?,
+        summary: read_json(&dir.join(SUMMARY_FILE))?,
+    })
+}
+
+/// Reads `alignment.csv` and `summary.json` of a finished `prefs` run.
+pub fn read_prefs_run(key: RunKey, dir: &Path) -> anyhow::Result<PrefsRun> {
+    Ok(PrefsRun {
+        key,
+        alignment: read_csv(&dir.join("alignment.csv"))?,
+        summary: read_json(&dir.join(SUMMARY_FILE))?,
+    })
+}
+
+/// Every finished run under `root` (`<task>/<method>/seed<S>/` with a summary), sorted by key.
+/// Directories that do not fit the layout (an unknown task, `seedX`) are not runs and are passed
+/// over; a run that is finished but unreadable is an error, since a figure silently missing a
+/// seed would mislead.
+pub fn finished_runs(root: &Path) -> anyhow::Result<Vec<(RunKey, PathBuf)>> {
+    let mut runs = Vec::new();
+    for task_entry in subdirs(root)? {
+        let Some(task) = name_of(&task_entry).and_then(|n| n.parse::<Task>().ok()) else {
+            continue;
+        };
+        for method_dir in subdirs(&task_entry)? {
+            let Some(method) = name_of(&method_dir) else {
+                continue;
+            };
+            for seed_dir in subdirs(&method_dir)? {
+                let seed = name_of(&seed_dir)
+                    .and_then(|n| n.strip_prefix("seed").and_then(|s| s.parse::<u64>().ok()));
+                if let Some(seed) = seed.filter(|_| is_finished(&seed_dir)) {
+                    let key = RunKey {
+                        task,
+                        method: method.clone(),
+                        seed,
+                    };
+                    runs.push((key, seed_dir));
+                }
+            }
+        }
+    }
+    runs.sort();
+    Ok(runs)
+}
+
+/// All finished `train` runs under `root`.
+pub fn load_train_runs(root: &Path) -> anyhow::Result<Vec<TrainRun>> {
+    finished_runs(root)?
+        .into_iter()
+        .map(|(key, dir)| read_train_run(key, &dir))
+        .collect()
+}
+
+/// All finished `prefs` runs under `root`.
+pub fn load_prefs_runs(root: &Path) -> anyhow::Result<Vec<PrefsRun>> {
+    finished_runs(root)?
+        .into_iter()
+        .map(|(key, dir)| read_prefs_run(key, &dir))
+        .collect()
+}
+
+fn subdirs(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    if !dir.is_dir() {
+        return Ok(Vec::new());
+    }
+    let mut out = Vec::new();
+    for entry in fs::read_dir(dir).with_context(|| format!("listing {}", dir.display()))? {
+        let path = entry?.path();
+        if path.is_dir() {
+            out.push(path);
+        }
+    }
+    Ok(out)
+}
+
+fn name_of(path: &Path) -> Option<String> {
+    path.file_name()?.to_str().map(str::to_owned)
+}

@@ -1,0 +1,182 @@
+//! `table.md`: per task a Markdown table of mean ± standard error over seeds, with the paper's
+//! published values beside ours for Figure 3. Pure: returns the text, the caller writes it.
+
+use std::fmt::Write;
+
+use super::aggregate::{Fig3Task, Fig5Task};
+use super::methods::{Fig3Method, display_name, paper_steps, published_fig3, task_title};
+use super::stats::MeanSe;
+
+/// A cumulative reward as the paper prints it: in thousands with one decimal ("34.1k") when
+/// `thousands`, else whole numbers; the error in the same unit. One table section uses one unit
+/// (see [`uses_thousands`]) so that its column reads at a glance.
+pub fn fmt_reward(m: MeanSe, thousands: bool) -> String {
+    if m.mean.is_nan() {
+        return "–".into();
+    }
+    if thousands {
+        format!("{:.1}k ± {:.1}k", m.mean / 1000.0, m.se / 1000.0)
+    } else {
+        format!("{:.0} ± {:.0}", m.mean, m.se)
+    }
+}
+
+/// Whether a task's rewards are shown in thousands: when any method's mean reaches a thousand.
+pub fn uses_thousands(task: &Fig3Task) -> bool {
+    task.methods
+        .iter()
+        .any(|m| m.final_return.mean.abs() >= 1000.0)
+}
+
+/// A percentage with one decimal and its standard error: "6.2 ± 0.4 %".
+pub fn fmt_pct(m: MeanSe) -> String {
+    if m.mean.is_nan() {
+        return "–".into();
+    }
+    format!("{:.1} ± {:.1} %", m.mean, m.se)
+}
+
+fn fmt_plain(m: MeanSe, decimals: usize) -> String {
+    if m.mean.is_nan() {
+        return "–".into();
+    }
+    format!("{:.*} ± {:.*}", decimals, m.mean, decimals, m.se)
+}
+
+/// Steps as "150k" (or the exact number when not a whole thousand).
+fn fmt_steps(steps: u64) -> String {
+    if steps >= 1000 && steps.is_multiple_of(1000) {
+        format!("{}k", steps / 1000)
+    } else {
+        steps.to_string()
+    }
+}
+
+const FIG3_INTRO: &str = "\
+Cumulative reward summed over all finished episodes at the end of training, mean ± standard \
+error over seeds; feedback is the share of environment steps on which the oracle answered. \
+\"Paper\" is the published run (algorithms.md, section 2). Our simulators are not the paper's, \
+so compare ratios between methods, not absolute values.
+";
+
+/// The Figure 3 table: one section per task, rows in legend order, plus a row for every
+/// published method this grid has not run (so the paper's column is always complete).
+pub fn fig3_table(tasks: &[Fig3Task]) -> String {
+    let mut out = String::from("# Figure 3: cumulative reward during training\n\n");
+    out.push_str(FIG3_INTRO);
+    for task in tasks {
+        let mut steps: Vec<u64> = task.methods.iter().map(|m| m.steps).collect();
+        steps.sort_unstable();
+        steps.dedup();
+        let ours = match steps.as_slice() {
+            [one] => fmt_steps(*one),
+            [first, .., last] => format!("{}–{}", fmt_steps(*first), fmt_steps(*last)),
+            [] => "no".into(),
+        };
+        let _ = write!(
+            out,
+            "\n## {}: {} steps (paper: {})\n\n\
+             | Method | Cumulative reward | Feedback | Seeds | Paper |\n\
+             |---|---:|---:|---:|---:|\n",
+            task_title(task.task),
+            ours,
+            fmt_steps(paper_steps(task.task)),
+        );
+        let thousands = uses_thousands(task);
+        let mut rows: Vec<(usize, String)> = Vec::new();
+        for m in &task.methods {
+            let kind = Fig3Method::parse(&m.method);
+            let mut name = display_name(&m.method);
+            if matches!(kind, Some(Fig3Method::EfMatched(_))) {
+                name.push_str(" (DREF's rate)");
+            }
+            let paper = kind.map_or("–".into(), |k| fmt_published(task.task, k));
+            let row = format!(
+                "| {name} | {} | {} | {} | {paper} |\n",
+                fmt_reward(m.final_return, thousands),
+                fmt_pct(m.feedback_pct),
+                m.final_return.n,
+            );
+            rows.push((kind.map_or(100, Fig3Method::rank), row));
+        }
+        let published = [
+            Fig3Method::Dref,
+            Fig3Method::Ef100,
+            Fig3Method::Ef50,
+            Fig3Method::Ef25,
+            Fig3Method::Sac,
+            Fig3Method::EfMatched(f64::NAN),
+        ];
+        for kind in published {
+            if !rows.iter().any(|(rank, _)| *rank == kind.rank()) {
+                let name = match kind {
+                    Fig3Method::EfMatched(_) => "EF at DREF's rate".to_string(),
+                    Fig3Method::Dref => "DREF".into(),
+                    Fig3Method::Ef100 => "EF-100%".into(),
+                    Fig3Method::Ef50 => "EF-50%".into(),
+                    Fig3Method::Ef25 => "EF-25%".into(),
+                    Fig3Method::Sac => "SAC".into(),
+                };
+                let paper = fmt_published(task.task, kind);
+                rows.push((kind.rank(), format!("| {name} | – | – | 0 | {paper} |\n")));
+            }
+        }
+        // Stable: our rows keep their legend order, missing ones slot in at the paper's place.
+        rows.sort_by_key(|(rank, _)| *rank);
+        for (_, row) in rows {
+            out.push_str(&row);
+        }
+    }
+    out
+}
+
+fn fmt_published(task: crate::sim::Task, method: Fig3Method) -> String {
+    let p = published_fig3(task, method);
+    match p.feedback_pct {
+        Some(pct) => format!("{:.1}k ({pct:.1} %)", p.cumulative_k),
+        None => format!("{:.1}k", p.cumulative_k),
+    }
+}
+
+const FIG5_INTRO: &str = "\
+Alignment (mean over posterior samples of the cosine between the estimated and the true reward \
+weights) after the last query, mean ± standard error over seeds, each seed with its own true \
+weights. The paper publishes no table; its text reports DRPL converging to about 0.8 or more on \
+every task and beating all baselines, with DRPL-SS second.
+";
+
+/// The Figure 5 table: one section per task, rows in legend order.
+pub fn fig5_table(tasks: &[Fig5Task]) -> String {
+    let mut out = String::from("# Figure 5: alignment of the learnt reward\n\n");
+    out.push_str(FIG5_INTRO);
+    for task in tasks {
+        let queries = task
+            .methods
+            .iter()
+            .filter_map(|m| m.curve.x.last())
+            .fold(0.0f64, |a, &b| a.max(b));
+        let _ = write!(
+            out,
+            "\n## {}: {} queries\n\n\
+             | Method | Final alignment | Mean segment length | Seeds |\n\
+             |---|---:|---:|---:|\n",
+            task_title(task.task),
+            queries,
+        );
+        for m in &task.methods {
+            let _ = writeln!(
+                out,
+                "| {} | {} | {} | {} |",
+                display_name(&m.method),
+                fmt_plain(m.final_alignment, 3),
+                fmt_plain(m.segment_length, 1),
+                m.final_alignment.n,
+            );
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+#[path = "table_tests.rs"]
+mod tests;

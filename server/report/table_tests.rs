@@ -1,0 +1,111 @@
+//! Table formatting on hand-made aggregates.
+
+use super::*;
+use crate::report::aggregate::{Curve, Fig3Method as Fig3Row, Fig5Method as Fig5Row};
+use crate::sim::Task;
+
+fn ms(mean: f64, se: f64, n: usize) -> MeanSe {
+    MeanSe { mean, se, n }
+}
+
+fn fig3_row(method: &str, final_return: MeanSe, feedback: MeanSe) -> Fig3Row {
+    Fig3Row {
+        method: method.into(),
+        curve: Curve::default(),
+        final_return,
+        feedback_pct: feedback,
+        steps: 150_000,
+    }
+}
+
+#[test]
+fn report_numbers_are_formatted_like_the_paper() {
+    assert_eq!(fmt_reward(ms(34_123.0, 1_260.0, 5), true), "34.1k ± 1.3k");
+    assert_eq!(fmt_reward(ms(-6_000.0, 40.0, 5), true), "-6.0k ± 0.0k");
+    assert_eq!(fmt_reward(ms(812.4, 31.6, 5), true), "0.8k ± 0.0k");
+    assert_eq!(fmt_reward(ms(812.4, 31.6, 5), false), "812 ± 32");
+    assert_eq!(fmt_reward(ms(f64::NAN, f64::NAN, 0), false), "–");
+    assert_eq!(fmt_pct(ms(6.24, 0.31, 5)), "6.2 ± 0.3 %");
+    assert_eq!(fmt_steps(150_000), "150k");
+    assert_eq!(fmt_steps(1_500), "1500");
+}
+
+#[test]
+fn report_fig3_table_puts_the_papers_values_beside_ours() {
+    let tasks = [Fig3Task {
+        task: Task::LunarLander,
+        methods: vec![
+            fig3_row("dref", ms(30_000.0, 1_000.0, 5), ms(6.2, 0.4, 5)),
+            fig3_row("sac", ms(860.0, 500.0, 5), ms(0.0, 0.0, 5)),
+            fig3_row("ef-6.2", ms(-1_000.0, 2_000.0, 4), ms(6.1, 0.1, 4)),
+        ],
+    }];
+    let text = fig3_table(&tasks);
+    let expected = "\
+## Lunar-Lander: 150k steps (paper: 150k)
+
+| Method | Cumulative reward | Feedback | Seeds | Paper |
+|---|---:|---:|---:|---:|
+| DREF | 30.0k ± 1.0k | 6.2 ± 0.4 % | 5 | 34.1k (6.3 %) |
+| EF-100% | – | – | 0 | 29.1k |
+| EF-50% | – | – | 0 | 24.2k |
+| EF-25% | – | – | 0 | 18.7k |
+| SAC | 0.9k ± 0.5k | 0.0 ± 0.0 % | 5 | 17.6k |
+| EF-6.2% (DREF's rate) | -1.0k ± 2.0k | 6.1 ± 0.1 % | 4 | -6.0k |
+";
+    assert!(text.starts_with("# Figure 3"), "{text}");
+    assert!(
+        text.ends_with(expected),
+        "got:\n{text}\nwanted the end:\n{expected}"
+    );
+}
+
+#[test]
+fn report_fig3_table_names_a_missing_matched_baseline_and_shows_step_ranges() {
+    let mut short = fig3_row("sac", ms(5.0, 1.0, 2), ms(0.0, 0.0, 2));
+    short.steps = 2_000;
+    let mut long = fig3_row("dref", ms(9.0, 1.0, 2), ms(1.6, 0.1, 2));
+    long.steps = 100_000;
+    let text = fig3_table(&[Fig3Task {
+        task: Task::Reaching,
+        methods: vec![long, short],
+    }]);
+    assert!(
+        text.contains("## Reaching-Sim: 2k–100k steps (paper: 100k)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("| EF at DREF's rate | – | – | 0 | 10.2k |"),
+        "{text}"
+    );
+    assert!(
+        text.contains("| DREF | 9 ± 1 | 1.6 ± 0.1 % | 2 | 11.4k (1.6 %) |"),
+        "{text}"
+    );
+}
+
+#[test]
+fn report_fig5_table_lists_final_alignment_and_segment_length() {
+    let row = |method: &str, a: f64, len: f64| Fig5Row {
+        method: method.into(),
+        curve: Curve {
+            x: vec![1.0, 40.0],
+            ..Curve::default()
+        },
+        final_alignment: ms(a, 0.02, 5),
+        segment_length: ms(len, 0.5, 5),
+    };
+    let text = fig5_table(&[Fig5Task {
+        task: Task::Placing,
+        methods: vec![row("drpl", 0.85, 12.0), row("fragment", 0.41, 12.0)],
+    }]);
+    let expected = "\
+## Placing-Sim: 40 queries
+
+| Method | Final alignment | Mean segment length | Seeds |
+|---|---:|---:|---:|
+| DRPL | 0.850 ± 0.020 | 12.0 ± 0.5 | 5 |
+| Random fragment | 0.410 ± 0.020 | 12.0 ± 0.5 | 5 |
+";
+    assert!(text.ends_with(expected), "got:\n{text}");
+}
