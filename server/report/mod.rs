@@ -53,13 +53,13 @@ pub fn write_report(figure: Figure, root: &Path) -> anyhow::Result<Written> {
         Figure::Fig3 => {
             let runs = run_files::load_train_runs(root)?;
             let tasks = aggregate_fig3(&runs, FIG3_GRID_POINTS);
-            plot::write_fig3(&tasks, &written.svg, &written.png)?;
+            plot::write_figure(&tasks, &written.svg, &written.png)?;
             (table::fig3_table(&tasks), runs.len())
         }
         Figure::Fig5 => {
             let runs = run_files::load_prefs_runs(root)?;
             let tasks = aggregate_fig5(&runs);
-            plot::write_fig5(&tasks, &written.svg, &written.png)?;
+            plot::write_figure(&tasks, &written.svg, &written.png)?;
             (table::fig5_table(&tasks), runs.len())
         }
     };

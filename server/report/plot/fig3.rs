@@ -2,17 +2,13 @@
 //! standard-error band, the legend naming each method with its mean feedback percentage where
 //! the name does not already say it ("DREF (6.2 %)").
 
-use std::path::Path;
-
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{
-    DESC_PX, LEGEND_PX, TICK_PX, TITLE_PX, figure_size, method_color, padded_range, prepare,
-    short_number, text,
+    DESC_PX, LEGEND_PX, Panel, TICK_PX, TITLE_PX, method_color, padded_range, short_number, text,
 };
 use crate::report::aggregate::{Fig3Method as Row, Fig3Task};
-use crate::report::font;
 use crate::report::methods::{Fig3Method, display_name, task_title};
 
 /// The legend entry of a method: its paper name, plus its measured feedback percentage for
@@ -27,6 +23,15 @@ pub fn legend_label(row: &Row) -> String {
         format!("{name} ({:.1} %)", row.feedback_pct.mean)
     } else {
         name
+    }
+}
+
+impl Panel for Fig3Task {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+    ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        draw_panel(area, self)
     }
 }
 
@@ -103,28 +108,5 @@ fn draw_panel<DB: DrawingBackend>(
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK.mix(0.3))
         .draw()?;
-    Ok(())
-}
-
-fn draw<DB: DrawingBackend>(
-    root: &DrawingArea<DB, Shift>,
-    tasks: &[Fig3Task],
-) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-    prepare(root, tasks.len())?;
-    if tasks.is_empty() {
-        return Ok(());
-    }
-    for (area, task) in root.split_evenly((1, tasks.len())).iter().zip(tasks) {
-        draw_panel(area, task)?;
-    }
-    root.present()
-}
-
-/// Draws Figure 3 from aggregated runs into `svg` and `png`.
-pub fn write_fig3(tasks: &[Fig3Task], svg: &Path, png: &Path) -> anyhow::Result<()> {
-    font::ensure_registered();
-    let size = figure_size(tasks.len());
-    draw(&SVGBackend::new(svg, size).into_drawing_area(), tasks)?;
-    draw(&BitMapBackend::new(png, size).into_drawing_area(), tasks)?;
     Ok(())
 }

@@ -1,16 +1,11 @@
 //! Figure 5: alignment against the number of queries, one line per method with standard-error
 //! bars at every query.
 
-use std::path::Path;
-
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{
-    DESC_PX, LEGEND_PX, TICK_PX, TITLE_PX, figure_size, method_color, padded_range, prepare, text,
-};
+use super::{DESC_PX, LEGEND_PX, Panel, TICK_PX, TITLE_PX, method_color, padded_range, text};
 use crate::report::aggregate::Fig5Task;
-use crate::report::font;
 use crate::report::methods::{display_name, task_title};
 
 /// Top of the alignment axis: a cosine never exceeds 1, so the band above it holds the legend
@@ -20,6 +15,15 @@ const Y_TOP: f64 = 1.3;
 /// Horizontal shift between methods' error bars, in queries, so that bars at the same query do
 /// not sit on top of each other.
 const DODGE: f64 = 0.18;
+
+impl Panel for Fig5Task {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+    ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        draw_panel(area, self)
+    }
+}
 
 fn draw_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
@@ -98,28 +102,5 @@ fn draw_panel<DB: DrawingBackend>(
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK.mix(0.3))
         .draw()?;
-    Ok(())
-}
-
-fn draw<DB: DrawingBackend>(
-    root: &DrawingArea<DB, Shift>,
-    tasks: &[Fig5Task],
-) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-    prepare(root, tasks.len())?;
-    if tasks.is_empty() {
-        return Ok(());
-    }
-    for (area, task) in root.split_evenly((1, tasks.len())).iter().zip(tasks) {
-        draw_panel(area, task)?;
-    }
-    root.present()
-}
-
-/// Draws Figure 5 from aggregated runs into `svg` and `png`.
-pub fn write_fig5(tasks: &[Fig5Task], svg: &Path, png: &Path) -> anyhow::Result<()> {
-    font::ensure_registered();
-    let size = figure_size(tasks.len());
-    draw(&SVGBackend::new(svg, size).into_drawing_area(), tasks)?;
-    draw(&BitMapBackend::new(png, size).into_drawing_area(), tasks)?;
     Ok(())
 }

@@ -7,13 +7,13 @@
 mod fig3;
 mod fig5;
 
-pub use fig3::write_fig3;
-pub use fig5::write_fig5;
+use std::path::Path;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
+use super::font;
 use super::methods::order_key;
 
 /// Pixels of one panel; a figure is `tasks` panels side by side.
@@ -70,6 +70,37 @@ fn prepare<DB: DrawingBackend>(
             .pos(Pos::new(HPos::Center, VPos::Center));
         root.draw_text("no finished runs yet", &style, (w as i32 / 2, h as i32 / 2))?;
     }
+    Ok(())
+}
+
+/// One task's panel of a figure.
+pub trait Panel {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+    ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>>;
+}
+
+fn draw_panels<DB: DrawingBackend, P: Panel>(
+    root: &DrawingArea<DB, Shift>,
+    panels: &[P],
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    prepare(root, panels.len())?;
+    if panels.is_empty() {
+        return Ok(());
+    }
+    for (area, panel) in root.split_evenly((1, panels.len())).iter().zip(panels) {
+        panel.draw(area)?;
+    }
+    root.present()
+}
+
+/// Draws a figure, one panel per task side by side, into `svg` and `png`.
+pub fn write_figure<P: Panel>(panels: &[P], svg: &Path, png: &Path) -> anyhow::Result<()> {
+    font::ensure_registered();
+    let size = figure_size(panels.len());
+    draw_panels(&SVGBackend::new(svg, size).into_drawing_area(), panels)?;
+    draw_panels(&BitMapBackend::new(png, size).into_drawing_area(), panels)?;
     Ok(())
 }
 
