@@ -11,7 +11,7 @@ fn termination_masks_the_bootstrap_and_truncation_does_not() {
     sac.compute_target_q_values(ent_coef);
     let b = &sac.buffers;
     let (gamma, y) = (sac.config.gamma, b.target_q_values.clone());
-    for i in 0..5 {
+    for (i, &y_i) in y.iter().enumerate() {
         // next_q_value by hand from the target critics' outputs (still in the workspaces).
         let next_q_value =
             b.q1_ws.output()[i].min(b.q2_ws.output()[i]) - ent_coef * b.next_log_pi[i];
@@ -21,11 +21,11 @@ fn termination_masks_the_bootstrap_and_truncation_does_not() {
         );
         let r = b.batch.rewards[i];
         if b.batch.dones[i] == 1.0 {
-            assert_eq!(y[i], r, "row {i} terminated: y = r, no bootstrap");
+            assert_eq!(y_i, r, "row {i} terminated: y = r, no bootstrap");
         } else {
             // A truncated transition is stored as not terminated: it bootstraps.
             assert!(
-                (y[i] - (r + gamma * next_q_value)).abs() < 1e-6,
+                (y_i - (r + gamma * next_q_value)).abs() < 1e-6,
                 "row {i}: y = r + gamma next_q"
             );
         }
