@@ -34,3 +34,32 @@ pub fn mflop_per_update(obs_dim: usize, act_dim: usize, config: &SacConfig) -> f
         + backward(actor, actor_first); // 6. actor backward
     2.0 * step * config.gradient_steps as f64 / 1e6
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::Task;
+
+    #[test]
+    fn counts_by_hand_on_a_tiny_learner() {
+        let mut config = SacConfig::for_task(Task::Reaching);
+        (config.hidden, config.batch_size, config.human_critic) = (vec![2], 1, None);
+        // Actor 1 -> 2 -> 2: F = 2 + 4, first layer 2. Critic 2 -> 2 -> 1: F = 4 + 2, first 4.
+        // actor(s) 6, actor(s') 6, targets 12, critics 2 (6 + 8), actor loss 2 (6 + 6), actor
+        // backward 10: 86 multiply-adds.
+        assert_eq!(mflop_per_update(1, 1, &config), 2.0 * 86.0 / 1e6);
+        // Human critics: + 2 (6 + 8) in their loss, + 2 (6 + 6) in the actor loss.
+        config.human_critic = Some(Default::default());
+        assert_eq!(
+            mflop_per_update(1, 1, &config),
+            2.0 * (86.0 + 28.0 + 24.0) / 1e6
+        );
+    }
+
+    #[test]
+    fn lunar_lander_update_is_3_3_gflop() {
+        let config = SacConfig::for_task(Task::LunarLander);
+        let mflop = mflop_per_update(8, 2, &config);
+        assert!((mflop - 3290.112).abs() < 1e-6, "{mflop}");
+    }
+}
