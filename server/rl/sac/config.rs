@@ -37,7 +37,7 @@ pub struct HumanCriticConfig {
     /// Weight of H against Q in the actor loss (the authors: 9, as `0.1 Q + 0.9 H`).
     pub lambda: f32,
     pub mix: ActorMix,
-    /// `human_critic_mask` [choice]: regress H only on rows that received feedback (H != 0).
+    /// `human_critic_mask` (our choice, `algorithms.md`): regress H only on rows that received feedback (H != 0).
     /// The authors train on every sampled row, the H = 0 ones included (false).
     pub mask: bool,
 }

@@ -1,5 +1,5 @@
 //! One gradient step, in stable-baselines3's order (`SAC.train`), which the authors' DREF fork
-//! follows, with the human critic between the critics and the actor [authors]:
+//! follows, with the human critic between the critics and the actor (the authors' order):
 //!
 //! 1. policy sample at s: `a_pi`, `log_pi` (fresh noise);
 //! 2. temperature: `ent_coef = exp(log_ent_coef)` *before* its step, then one Adam step on
