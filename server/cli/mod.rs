@@ -1,7 +1,12 @@
 //! The `dualrep` command line: one sub-command per file, each a thin shell over the library.
 
+mod bench;
+mod expert;
+mod overrides;
+mod progress;
 mod reproduce;
 mod sim;
+mod train;
 
 use clap::{Parser, Subcommand};
 
@@ -20,13 +25,22 @@ pub struct Cli {
 pub enum Command {
     /// Run a random or heuristic policy on a task and print a JSON summary.
     Sim(sim::SimArgs),
+    /// Train SAC, EF-p% or DREF with the synthetic evaluative trainer; write metrics.csv and summary.json.
+    Train(train::TrainArgs),
+    /// Train the SAC expert that the synthetic evaluative trainer consults.
+    Expert(expert::ExpertArgs),
     /// Run the paper's Figure 3 or 5 grid as parallel processes; write table.md and figures.
     Reproduce(reproduce::ReproduceArgs),
+    /// Time the learner: `bench sac` prints updates per second against the sgemm peak.
+    Bench(bench::BenchArgs),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Sim(args) => sim::run(args),
+        Command::Train(args) => train::run(args),
+        Command::Expert(args) => expert::run(args),
         Command::Reproduce(args) => reproduce::run(args),
+        Command::Bench(args) => bench::run(args),
     }
 }

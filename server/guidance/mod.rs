@@ -3,6 +3,12 @@
 //!
 //! - `query_rule`: DREF's UCB rule over abstract states (Eq. 1-2 and the authors' form).
 //! - `feedback_schedule`: which steps ask, per method (DREF, EF-p%, SAC).
+//! - `evaluative_trainer`: the `EvaluativeTrainer` trait (synthetic oracle or a person) and H.
+//! - `expert_oracle`: the synthetic trainer, a SAC expert's critic judging the learner's action.
+//! - `evaluative_run`: one SAC / EF-p% / DREF run, step by step, and policy evaluation.
 
+pub mod evaluative_run;
+pub mod evaluative_trainer;
+pub mod expert_oracle;
 pub mod feedback_schedule;
 pub mod query_rule;

@@ -65,6 +65,21 @@ impl Adam {
         self.t
     }
 
+    /// Each group's first- and second-moment estimates (PyTorch's `exp_avg`, `exp_avg_sq`),
+    /// for checkpoints.
+    pub fn moments(&self) -> impl Iterator<Item = (&[f32], &[f32])> {
+        self.m.iter().zip(&self.v).map(|(m, v)| (&m[..], &v[..]))
+    }
+
+    /// Restore a checkpointed state: the step count, then each group's moments in place.
+    pub fn moments_mut(&mut self, steps: u64) -> impl Iterator<Item = (&mut [f32], &mut [f32])> {
+        self.t = steps;
+        self.m
+            .iter_mut()
+            .zip(&mut self.v)
+            .map(|(m, v)| (&mut m[..], &mut v[..]))
+    }
+
     /// One update of every group, given as `(params, grads)` pairs in the order of
     /// [`Adam::new`] (e.g. `adam.step([q1.params_and_grads(), q2.params_and_grads()])`).
     ///

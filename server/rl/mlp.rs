@@ -283,9 +283,9 @@ fn backward(
                 .iter_mut()
                 .zip(ws.activations[l].as_slice())
             {
-                if h <= 0.0 {
-                    *g = 0.0;
-                }
+                // A select with an unconditional store, not a conditional store: it vectorises
+                // (the branchy form cost a fifth of a Lunar Lander update).
+                *g = if h <= 0.0 { 0.0 } else { *g };
             }
         }
     }

@@ -16,6 +16,7 @@
 //! - [`squashed_gaussian`]: SAC's tanh-squashed Gaussian policy head: sampling, log-prob
 //!   with the tanh correction, and its gradient.
 //! - [`replay`]: the preallocated replay buffer, `(s, a, r, H, s', terminated)` per row.
+//! - [`sac`]: [`sac::Sac`], SAC with DREF's human critic, built from all of the above.
 //!
 //! ## Allocation
 //!
@@ -88,6 +89,7 @@ pub mod linear;
 pub mod loss;
 pub mod mlp;
 pub mod replay;
+pub mod sac;
 pub mod squashed_gaussian;
 pub mod workspace;
 
@@ -95,4 +97,5 @@ pub use adam::{Adam, AdamConfig};
 pub use linear::Linear;
 pub use loss::mse_loss;
 pub use mlp::{Mlp, ParamTensor};
+pub use sac::{ActorMix, CheckpointError, HumanCriticConfig, Sac, SacConfig, UpdateStats};
 pub use workspace::MlpWorkspace;

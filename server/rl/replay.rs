@@ -96,6 +96,14 @@ impl ReplayBuffer {
         self.capacity
     }
 
+    pub fn obs_dim(&self) -> usize {
+        self.obs_dim
+    }
+
+    pub fn act_dim(&self) -> usize {
+        self.act_dim
+    }
+
     /// Store a transition and return its slot, so that its H can be relabelled later (an undo).
     pub fn push(&mut self, t: Transition<'_>) -> usize {
         assert_eq!(t.obs.len(), self.obs_dim);

@@ -1,0 +1,204 @@
+//! `dualrep bench sac`: SAC update throughput on one thread, as one JSON object, beside the
+//! machine's `sgemm` rate measured in the same process.
+//!
+//! The learner is DREF's (human critic on) with the task's sizes, updating on a replay buffer of
+//! random transitions. `fraction_of_sgemm` = `updates_per_second * mflop_per_update / 1000 /
+//! sgemm_gflops`: how close the whole update (products, elementwise work, sampling, Adam) comes
+//! to running nothing but large matrix products. `benches/reference/torch_sac_update.py` times
+//! the same update in PyTorch.
+
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, bail};
+use clap::{Args, Subcommand};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+
+use crate::rl::replay::{ReplayBuffer, Transition};
+use crate::rl::sac::{Sac, SacConfig, mflop_per_update};
+use crate::sim::Task;
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    #[command(subcommand)]
+    pub what: BenchWhat,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum BenchWhat {
+    /// Gradient steps per second of DREF's SAC update, against the sgemm peak.
+    Sac(SacBenchArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct SacBenchArgs {
+    /// reaching, placing or lunar-lander: the observation and action sizes and the config.
+    #[arg(long)]
+    pub task: Task,
+    /// Hidden layer sizes instead of the task's, e.g. 256,256.
+    #[arg(long)]
+    pub hidden: Option<String>,
+    /// Batch size instead of the task's (512).
+    #[arg(long)]
+    pub batch: Option<usize>,
+    /// How long to time the updates.
+    #[arg(long, default_value_t = 5.0)]
+    pub seconds: f64,
+}
+
+#[derive(Serialize)]
+struct SacBench {
+    task: Task,
+    hidden: Vec<usize>,
+    batch: usize,
+    obs_dim: usize,
+    act_dim: usize,
+    threads: usize,
+    updates: u64,
+    updates_per_second: f64,
+    mflop_per_update: f64,
+    gflops: f64,
+    sgemm_gflops: f64,
+    fraction_of_sgemm: f64,
+}
+
+pub fn run(args: BenchArgs) -> anyhow::Result<()> {
+    match args.what {
+        BenchWhat::Sac(args) => bench_sac(args),
+    }
+}
+
+/// Observation and action sizes. Lunar Lander's are Gymnasium's `LunarLanderContinuous` (8, 2),
+/// stated here so the benchmark needs no simulator.
+fn task_dims(task: Task) -> (usize, usize) {
+    match task {
+        Task::LunarLander => (8, 2),
+        _ => {
+            let env = task.make_env();
+            let spec = env.spec();
+            (spec.observation_space.dim(), spec.action_space.dim())
+        }
+    }
+}
+
+fn bench_sac(args: SacBenchArgs) -> anyhow::Result<()> {
+    if !args.seconds.is_finite() || args.seconds <= 0.0 {
+        bail!("--seconds must be positive");
+    }
+    let mut config = SacConfig::for_task(args.task);
+    if let Some(hidden) = &args.hidden {
+        config
+            .set("hidden", hidden)
+            .map_err(anyhow::Error::msg)
+            .context("--hidden")?;
+    }
+    if let Some(batch) = args.batch {
+        config
+            .set("batch_size", &batch.to_string())
+            .map_err(anyhow::Error::msg)
+            .context("--batch")?;
+    }
+    config.gradient_steps = 1;
+    if config.human_critic.is_none() {
+        config
+            .set("human_critic", "true")
+            .map_err(anyhow::Error::msg)?;
+    }
+    let (obs_dim, act_dim) = task_dims(args.task);
+    let replay = random_replay(obs_dim, act_dim, 100_000);
+    let mut sac = Sac::new(obs_dim, act_dim, config.clone(), 0);
+    for _ in 0..3 {
+        sac.update(&replay); // warm-up: caches, page faults
+    }
+
+    let budget = Duration::from_secs_f64(args.seconds);
+    let start = Instant::now();
+    let mut updates = 0u64;
+    while start.elapsed() < budget {
+        sac.update(&replay);
+        updates += 1;
+    }
+    let updates_per_second = updates as f64 / start.elapsed().as_secs_f64();
+    let mflop = mflop_per_update(obs_dim, act_dim, &config);
+    let gflops = updates_per_second * mflop / 1000.0;
+    let sgemm_gflops = sgemm_gflops(256, Duration::from_secs_f64(args.seconds.min(2.0)));
+    let report = SacBench {
+        task: args.task,
+        hidden: config.hidden,
+        batch: config.batch_size,
+        obs_dim,
+        act_dim,
+        threads: 1,
+        updates,
+        updates_per_second,
+        mflop_per_update: mflop,
+        gflops,
+        sgemm_gflops,
+        fraction_of_sgemm: gflops / sgemm_gflops,
+    };
+    println!("{}", serde_json::to_string(&report)?);
+    Ok(())
+}
+
+fn random_replay(obs_dim: usize, act_dim: usize, n: usize) -> ReplayBuffer {
+    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    let mut replay = ReplayBuffer::new(n, obs_dim, act_dim);
+    let (mut obs, mut next_obs, mut action) =
+        (vec![0.0; obs_dim], vec![0.0; obs_dim], vec![0.0; act_dim]);
+    for _ in 0..n {
+        for v in obs.iter_mut().chain(&mut next_obs) {
+            *v = rng.random_range(-1.0..1.0);
+        }
+        for v in &mut action {
+            *v = rng.random_range(-1.0..1.0);
+        }
+        replay.push(Transition {
+            obs: &obs,
+            action: &action,
+            reward: rng.random_range(-1.0..1.0),
+            human: [-1.0, 0.0, 0.0, 1.0][rng.random_range(0..4)],
+            next_obs: &next_obs,
+            terminated: rng.random_bool(0.01),
+        });
+    }
+    replay
+}
+
+/// GFLOP/s of matrixmultiply's `sgemm` on `n x n x n` column-major products, one thread.
+fn sgemm_gflops(n: usize, budget: Duration) -> f64 {
+    let a: Vec<f32> = (0..n * n).map(|k| (k as f32 * 0.37).sin()).collect();
+    let b: Vec<f32> = (0..n * n).map(|k| (k as f32 * 0.11).cos()).collect();
+    let mut c = vec![0.0f32; n * n];
+    let product = |c: &mut [f32]| {
+        // SAFETY: a, b and c each hold n * n f32 in column-major order (row stride 1, column
+        // stride n), and c is borrowed mutably, so it aliases neither input.
+        unsafe {
+            matrixmultiply::sgemm(
+                n,
+                n,
+                n,
+                1.0,
+                a.as_ptr(),
+                1,
+                n as isize,
+                b.as_ptr(),
+                1,
+                n as isize,
+                0.0,
+                c.as_mut_ptr(),
+                1,
+                n as isize,
+            );
+        }
+    };
+    product(&mut c); // warm-up
+    let start = Instant::now();
+    let mut count = 0u64;
+    while start.elapsed() < budget {
+        product(&mut c);
+        count += 1;
+    }
+    std::hint::black_box(&c);
+    2.0 * (n * n * n) as f64 * count as f64 / start.elapsed().as_secs_f64() / 1e9
+}

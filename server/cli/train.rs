@@ -1,0 +1,245 @@
+//! `dualrep train`: one SAC / EF-p% / DREF run with the synthetic evaluative trainer, writing
+//! `metrics.csv` (a row per finished episode, flushed as it happens) and `summary.json` (written
+//! last, atomically: its presence marks a finished run for `reproduce`).
+
+use std::fs::{self, File};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::Args;
+use serde::Serialize;
+
+use super::overrides;
+use super::progress::Progress;
+use crate::guidance::evaluative_run::{EpisodeRecord, EvaluativeRun, EvaluativeRunConfig};
+use crate::guidance::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
+use crate::guidance::expert_oracle::{ExpertOracle, OracleRule};
+use crate::guidance::feedback_schedule::EvaluativeMethod;
+use crate::rl::Sac;
+use crate::sim::Task;
+
+#[derive(Debug, Args)]
+pub struct TrainArgs {
+    /// reaching, placing or lunar-lander.
+    #[arg(long)]
+    pub task: Task,
+    /// sac, dref or ef-<percent> (ef-100, ef-50, ef-25, ef-6.2, ...).
+    #[arg(long)]
+    pub method: EvaluativeMethod,
+    /// Environment steps (one gradient step each).
+    #[arg(long, default_value_t = 100_000, value_parser = clap::value_parser!(u64).range(1..))]
+    pub steps: u64,
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output directory (created).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Override a hyper-parameter, e.g. `--set hidden=256,256 --set c=0.3` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = overrides::parse_pair)]
+    pub overrides: Vec<(String, String)>,
+    /// A TOML file of `key = value` overrides, applied before `--set`.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// The expert the synthetic trainer consults [default: models/<task>.safetensors].
+    #[arg(long)]
+    pub expert: Option<PathBuf>,
+    /// The oracle's rule: authors (alpha Q*) or sign-aware.
+    #[arg(long, default_value = "authors", value_parser = parse_oracle_rule)]
+    pub oracle: OracleRule,
+}
+
+fn parse_oracle_rule(s: &str) -> Result<OracleRule, String> {
+    match s {
+        "authors" => Ok(OracleRule::Authors),
+        "sign-aware" => Ok(OracleRule::SignAware),
+        _ => Err(format!(
+            "unknown oracle rule {s:?}: expected authors or sign-aware"
+        )),
+    }
+}
+
+/// The trainer of a run that never asks (plain SAC).
+pub struct NoTrainer;
+
+impl EvaluativeTrainer for NoTrainer {
+    fn evaluate(&mut self, _query: &EvaluativeQuery<'_>) -> Evaluation {
+        Evaluation::NoFeedback
+    }
+}
+
+/// `summary.json`.
+#[derive(Debug, Serialize)]
+pub struct TrainSummary {
+    pub task: Task,
+    pub method: EvaluativeMethod,
+    pub seed: u64,
+    pub steps: u64,
+    pub episodes: u64,
+    pub cumulative_return: f64,
+    pub feedback_count: u64,
+    pub feedback_fraction: f64,
+    /// Mean return of the last 10 finished episodes.
+    pub final_mean_return: f64,
+    /// Success rate of the last 10 finished episodes.
+    pub final_success_rate: f64,
+    pub wall_seconds: f64,
+    pub updates_per_second: f64,
+    pub config: EvaluativeRunConfig,
+}
+
+/// The run's config: defaults for task and method, then the TOML file, then `--set`.
+pub fn resolve_config(
+    task: Task,
+    method: EvaluativeMethod,
+    seed: u64,
+    file: Option<&Path>,
+    sets: &[(String, String)],
+) -> anyhow::Result<EvaluativeRunConfig> {
+    let mut config = EvaluativeRunConfig::new(task, method, seed);
+    let from_file = match file {
+        Some(path) => overrides::read_toml(path)?,
+        None => Vec::new(),
+    };
+    for (k, v) in from_file.iter().chain(sets) {
+        overrides::apply(&mut config, k, v).map_err(anyhow::Error::msg)?;
+    }
+    Ok(config)
+}
+
+/// Load an expert written by `dualrep expert`.
+pub fn load_expert(path: &Path, task: Task) -> anyhow::Result<Sac> {
+    let bytes = fs::read(path).with_context(|| {
+        format!(
+            "reading the expert {} (train one with `dualrep expert --task {task} --out {}`)",
+            path.display(),
+            path.display()
+        )
+    })?;
+    Sac::from_safetensors(&bytes).with_context(|| format!("loading the expert {}", path.display()))
+}
+
+/// Write `bytes` to `path` through a temporary file and a rename, so a reader never sees half.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let tmp = path.with_extension("tmp");
+    fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
+    fs::rename(&tmp, path)
+        .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))
+}
+
+/// Run `run` to `steps`, appending finished episodes to `metrics.csv` in `out`.
+pub fn drive(
+    run: &mut EvaluativeRun,
+    trainer: &mut dyn EvaluativeTrainer,
+    steps: u64,
+    out: &Path,
+    label: &str,
+) -> anyhow::Result<Vec<EpisodeRecord>> {
+    let path = out.join("metrics.csv");
+    let mut csv = BufWriter::new(
+        File::create(&path).with_context(|| format!("creating {}", path.display()))?,
+    );
+    writeln!(
+        csv,
+        "step,episode,return,cumulative_return,feedback_count,feedback_fraction"
+    )?;
+    let mut episodes = Vec::new();
+    let mut progress = Progress::new(steps, label);
+    while run.steps() < steps {
+        let report = run.step(trainer);
+        if let Some(e) = report.episode {
+            writeln!(
+                csv,
+                "{},{},{},{},{},{}",
+                e.step,
+                e.episode,
+                e.episode_return,
+                e.cumulative_return,
+                e.feedback_count,
+                e.feedback_fraction
+            )?;
+            csv.flush()?;
+            episodes.push(e);
+        }
+        progress.update(run.steps(), || {
+            format!(
+                "episodes {} cumulative {:.0} feedback {}",
+                run.episodes(),
+                run.cumulative_return(),
+                run.feedback_count()
+            )
+        });
+    }
+    progress.finish();
+    Ok(episodes)
+}
+
+/// Mean return and success rate of the last `n` episodes (0 if none finished).
+pub fn final_performance(episodes: &[EpisodeRecord], n: usize) -> (f64, f64) {
+    let tail = &episodes[episodes.len().saturating_sub(n)..];
+    if tail.is_empty() {
+        return (0.0, 0.0);
+    }
+    let mean = tail.iter().map(|e| e.episode_return).sum::<f64>() / tail.len() as f64;
+    let successes = tail
+        .iter()
+        .filter(|e| e.outcome == crate::sim::Outcome::Success)
+        .count();
+    (mean, successes as f64 / tail.len() as f64)
+}
+
+pub fn run(args: TrainArgs) -> anyhow::Result<()> {
+    let config = resolve_config(
+        args.task,
+        args.method,
+        args.seed,
+        args.config.as_deref(),
+        &args.overrides,
+    )?;
+    let mut trainer: Box<dyn EvaluativeTrainer> = match args.method {
+        EvaluativeMethod::Sac => Box::new(NoTrainer),
+        _ => {
+            let path = args
+                .expert
+                .clone()
+                .unwrap_or_else(|| PathBuf::from(format!("models/{}.safetensors", args.task)));
+            let expert = load_expert(&path, args.task)?;
+            let act_dim = args.task.make_env().spec().action_space.dim();
+            Box::new(ExpertOracle::new(expert, act_dim, args.oracle))
+        }
+    };
+    fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    fs::write(
+        args.out.join("config.json"),
+        serde_json::to_vec_pretty(&config)?,
+    )?;
+
+    let start = Instant::now();
+    let mut run = EvaluativeRun::new(config.clone(), args.steps);
+    let label = format!("{} {} seed {}", args.task, args.method, args.seed);
+    let episodes = drive(&mut run, trainer.as_mut(), args.steps, &args.out, &label)?;
+    let wall_seconds = start.elapsed().as_secs_f64();
+    let (final_mean_return, final_success_rate) = final_performance(&episodes, 10);
+    let summary = TrainSummary {
+        task: args.task,
+        method: args.method,
+        seed: args.seed,
+        steps: run.steps(),
+        episodes: run.episodes(),
+        cumulative_return: run.cumulative_return(),
+        feedback_count: run.feedback_count(),
+        feedback_fraction: run.feedback_count() as f64 / run.steps() as f64,
+        final_mean_return,
+        final_success_rate,
+        wall_seconds,
+        updates_per_second: run.learner().updates() as f64 / wall_seconds,
+        config,
+    };
+    write_atomically(
+        &args.out.join("summary.json"),
+        &serde_json::to_vec_pretty(&summary)?,
+    )?;
+    println!("{}", serde_json::to_string(&summary)?);
+    Ok(())
+}

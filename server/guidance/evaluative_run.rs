@@ -1,0 +1,306 @@
+//! One run of SAC, EF-p% or DREF on a task, step by step (algorithms.md section 2), with an
+//! evaluative trainer answering the queries. Headless: the CLI drives it to a step budget and
+//! the server's session drives it at a watchable pace; both call [`EvaluativeRun::step`].
+//!
+//! Per environment step t:
+//! 1. `a_t ~ pi(.|s_t)`; `H_hat = min_j H_j(s_t, a_t)` before this step's update.
+//! 2. Step the env: `s_{t+1}, r_t, terminated, truncated`.
+//! 3. `g` = the scene graph on `(s_{t+1}, a_t)` [authors].
+//! 4. Ask iff the method's schedule says so (DREF: the UCB rank test on g; EF: a coin of p).
+//! 5. If asked, H_t comes from the trainer and DREF's statistics learn `|H_t - H_hat|`.
+//! 6. Store `(s_t, a_t, r_t, H_t, s_{t+1}, terminated)` and do the learner's gradient step.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use super::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
+use super::feedback_schedule::{EvaluativeMethod, FeedbackSchedule};
+use super::query_rule::{QueryRule, UcbForm};
+use crate::rl::replay::{ReplayBuffer, Transition};
+use crate::rl::{HumanCriticConfig, Sac, SacConfig, UpdateStats};
+use crate::scene_graph::{AbstractState, SceneGraph};
+use crate::sim::{Env, Outcome, Task};
+
+/// DREF's query-rule constants (algorithms.md section 2, from the authors' configs).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct QueryRuleConfig {
+    pub c: f64,
+    pub k: usize,
+    pub form: UcbForm,
+}
+
+impl QueryRuleConfig {
+    pub fn for_task(task: Task) -> Self {
+        let (c, k) = match task {
+            Task::LunarLander => (0.2, 60),
+            Task::Reaching => (0.1, 2),
+            Task::Placing => (0.2, 4),
+        };
+        Self {
+            c,
+            k,
+            form: UcbForm::Authors,
+        }
+    }
+}
+
+/// Everything that defines a run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EvaluativeRunConfig {
+    pub task: Task,
+    pub method: EvaluativeMethod,
+    pub seed: u64,
+    pub sac: SacConfig,
+    pub query_rule: QueryRuleConfig,
+    pub scene_graph: SceneGraph,
+}
+
+impl EvaluativeRunConfig {
+    /// The published defaults for `task` and `method`: plain SAC has no human critic, EF and
+    /// DREF have one with the authors' actor mix.
+    pub fn new(task: Task, method: EvaluativeMethod, seed: u64) -> Self {
+        let mut sac = SacConfig::for_task(task);
+        sac.human_critic = match method {
+            EvaluativeMethod::Sac => None,
+            _ => Some(HumanCriticConfig::default()),
+        };
+        Self {
+            task,
+            method,
+            seed,
+            sac,
+            query_rule: QueryRuleConfig::for_task(task),
+            scene_graph: SceneGraph::for_task(task),
+        }
+    }
+}
+
+/// One finished episode, as a row of `metrics.csv`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EpisodeRecord {
+    /// Environment steps of the run when the episode ended.
+    pub step: u64,
+    /// 0-based episode index.
+    pub episode: u64,
+    #[serde(rename = "return")]
+    pub episode_return: f64,
+    pub length: u32,
+    /// Sum of the returns of every finished episode so far (the paper's Figure 3 axis).
+    pub cumulative_return: f64,
+    /// Queries asked so far (each answered by the trainer, "no feedback" included).
+    pub feedback_count: u64,
+    /// `feedback_count / step`.
+    pub feedback_fraction: f64,
+    pub outcome: Outcome,
+}
+
+/// What one call of [`EvaluativeRun::step`] did.
+#[derive(Clone, Debug)]
+pub struct StepReport {
+    pub reward: f32,
+    pub abstract_state: AbstractState,
+    /// The trainer's answer if this step asked.
+    pub evaluation: Option<Evaluation>,
+    pub update: Option<UpdateStats>,
+    /// Set when this step ended an episode (the env was reset for the next one).
+    pub episode: Option<EpisodeRecord>,
+}
+
+pub struct EvaluativeRun {
+    config: EvaluativeRunConfig,
+    env: Box<dyn Env>,
+    learner: Sac,
+    replay: ReplayBuffer,
+    schedule: FeedbackSchedule,
+    /// Draws each episode's reset seed, so a run is reproducible from its own seed.
+    episode_seeds: ChaCha8Rng,
+    obs: Vec<f32>,
+    action: Vec<f32>,
+    steps: u64,
+    episodes: u64,
+    episode_return: f64,
+    episode_length: u32,
+    cumulative_return: f64,
+    feedback_count: u64,
+    no_feedback_count: u64,
+}
+
+impl EvaluativeRun {
+    /// A fresh run whose replay buffer holds at most `min(buffer_size, steps)` transitions:
+    /// a short run does not preallocate the full million rows.
+    pub fn new(config: EvaluativeRunConfig, steps: u64) -> Self {
+        let mut env = config.task.make_env();
+        let (obs_dim, act_dim) = (
+            env.spec().observation_space.dim(),
+            env.spec().action_space.dim(),
+        );
+        let learner = Sac::new(obs_dim, act_dim, config.sac.clone(), config.seed);
+        let capacity = (config.sac.buffer_size as u64).min(steps.max(1)) as usize;
+        let replay = ReplayBuffer::new(capacity, obs_dim, act_dim);
+        let q = config.query_rule;
+        let schedule =
+            FeedbackSchedule::new(config.method, QueryRule::new(q.c, q.k, q.form), config.seed);
+        let mut episode_seeds = ChaCha8Rng::seed_from_u64(config.seed ^ 0xe915_0de5_eed5_0000);
+        let obs = env.reset(episode_seeds.random());
+        Self {
+            config,
+            env,
+            learner,
+            replay,
+            schedule,
+            episode_seeds,
+            obs,
+            action: vec![0.0; act_dim],
+            steps: 0,
+            episodes: 0,
+            episode_return: 0.0,
+            episode_length: 0,
+            cumulative_return: 0.0,
+            feedback_count: 0,
+            no_feedback_count: 0,
+        }
+    }
+
+    pub fn config(&self) -> &EvaluativeRunConfig {
+        &self.config
+    }
+
+    /// Environment steps taken.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    pub fn episodes(&self) -> u64 {
+        self.episodes
+    }
+
+    pub fn cumulative_return(&self) -> f64 {
+        self.cumulative_return
+    }
+
+    /// Queries asked so far.
+    pub fn feedback_count(&self) -> u64 {
+        self.feedback_count
+    }
+
+    /// Queries answered "no feedback" (the paper's NFC for human trainers).
+    pub fn no_feedback_count(&self) -> u64 {
+        self.no_feedback_count
+    }
+
+    pub fn learner(&self) -> &Sac {
+        &self.learner
+    }
+
+    pub fn env(&self) -> &dyn Env {
+        self.env.as_ref()
+    }
+
+    /// Take one environment step and one learning step.
+    pub fn step(&mut self, trainer: &mut dyn EvaluativeTrainer) -> StepReport {
+        let uses_human_critic = self.config.sac.human_critic.is_some();
+        self.learner.act(&self.obs, false, &mut self.action);
+        let predicted = if uses_human_critic {
+            self.learner.human_estimate(&self.obs, &self.action)
+        } else {
+            0.0
+        };
+        let step = self.env.step(&self.action);
+        let g = self.config.scene_graph.evaluate(&step.obs, &self.action);
+
+        let evaluation = if self.schedule.should_ask(g) {
+            let query = EvaluativeQuery {
+                step: self.steps,
+                obs: &self.obs,
+                action: &self.action,
+                next_obs: &step.obs,
+                abstract_state: g,
+                predicted,
+            };
+            let answer = trainer.evaluate(&query);
+            self.schedule.record(g, answer.value(), predicted);
+            self.feedback_count += 1;
+            if answer == Evaluation::NoFeedback {
+                self.no_feedback_count += 1;
+            }
+            Some(answer)
+        } else {
+            None
+        };
+
+        self.replay.push(Transition {
+            obs: &self.obs,
+            action: &self.action,
+            reward: step.reward,
+            human: evaluation.map_or(0.0, Evaluation::value),
+            next_obs: &step.obs,
+            terminated: step.terminated,
+        });
+        let update = self.learner.update(&self.replay);
+
+        self.steps += 1;
+        self.episode_return += f64::from(step.reward);
+        self.episode_length += 1;
+        let episode = step.outcome.map(|outcome| self.finish_episode(outcome));
+        if episode.is_none() {
+            self.obs.copy_from_slice(&step.obs);
+        }
+        StepReport {
+            reward: step.reward,
+            abstract_state: g,
+            evaluation,
+            update,
+            episode,
+        }
+    }
+
+    fn finish_episode(&mut self, outcome: Outcome) -> EpisodeRecord {
+        self.cumulative_return += self.episode_return;
+        let record = EpisodeRecord {
+            step: self.steps,
+            episode: self.episodes,
+            episode_return: self.episode_return,
+            length: self.episode_length,
+            cumulative_return: self.cumulative_return,
+            feedback_count: self.feedback_count,
+            feedback_fraction: self.feedback_count as f64 / self.steps as f64,
+            outcome,
+        };
+        self.episodes += 1;
+        self.episode_return = 0.0;
+        self.episode_length = 0;
+        self.obs = self.env.reset(self.episode_seeds.random());
+        record
+    }
+}
+
+impl EvaluativeRun {
+    /// The trained learner, for saving or evaluation.
+    pub fn into_learner(self) -> Sac {
+        self.learner
+    }
+}
+
+/// Mean return and success rate of `learner`'s deterministic policy (tanh of the mean) over
+/// `episodes` episodes with reset seeds `seed, seed + 1, ...`.
+pub fn evaluate_policy(task: Task, learner: &mut Sac, episodes: u32, seed: u64) -> (f64, f64) {
+    let mut env = task.make_env();
+    let mut action = vec![0.0; env.spec().action_space.dim()];
+    let (mut total, mut successes) = (0.0f64, 0u32);
+    for i in 0..u64::from(episodes) {
+        let mut obs = env.reset(seed.wrapping_add(i));
+        loop {
+            learner.act(&obs, true, &mut action);
+            let step = env.step(&action);
+            total += f64::from(step.reward);
+            if let Some(outcome) = step.outcome {
+                successes += u32::from(outcome == Outcome::Success);
+                break;
+            }
+            obs = step.obs;
+        }
+    }
+    let n = f64::from(episodes.max(1));
+    (total / n, f64::from(successes) / n)
+}

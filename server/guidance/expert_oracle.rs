@@ -1,0 +1,139 @@
+//! The synthetic evaluative trainer [paper, authors]: a fully trained SAC expert judges the
+//! learner's action against a sampled action of its own.
+//!
+//! At each query: `a* ~ pi_expert(.|s)` (sampled, not the mean), `Q* = min` of the expert's twin
+//! critics, and `H = +1 if alpha * Q*(s, a*) < Q*(s, a) else -1`, where alpha starts at 0.999 and
+//! grows by 1e-8 every environment step (queried or not), so the bar rises to the expert's own
+//! action over a 100k-step run. For negative Q the authors' bar `alpha * Q*` lies *above* Q*
+//! (stricter than intended); `SignAware` uses `Q* - (1 - alpha) |Q*|` instead [choice].
+
+use serde::{Deserialize, Serialize};
+
+use super::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
+use crate::rl::Sac;
+
+/// How the oracle turns the two Q values into +1 / -1.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum OracleRule {
+    /// `alpha * Q*(s, a*) < Q*(s, a)`, as the authors wrote it.
+    #[default]
+    Authors,
+    /// `Q*(s, a*) - (1 - alpha) |Q*(s, a*)| < Q*(s, a)`: the same margin for either sign.
+    SignAware,
+}
+
+/// alpha's value at the start of a run and its growth per environment step [authors].
+pub const ALPHA_START: f64 = 0.999;
+pub const ALPHA_GROWTH_PER_STEP: f64 = 1e-8;
+
+pub struct ExpertOracle {
+    expert: Sac,
+    rule: OracleRule,
+    expert_action: Vec<f32>,
+}
+
+impl ExpertOracle {
+    pub fn new(expert: Sac, act_dim: usize, rule: OracleRule) -> Self {
+        Self {
+            expert,
+            rule,
+            expert_action: vec![0.0; act_dim],
+        }
+    }
+
+    /// alpha after `step` environment steps.
+    pub fn alpha(step: u64) -> f64 {
+        ALPHA_START + ALPHA_GROWTH_PER_STEP * step as f64
+    }
+
+    /// The judgement given both critics' values, at step `step`.
+    pub fn judge(rule: OracleRule, step: u64, q_expert: f32, q_learner: f32) -> Evaluation {
+        let alpha = Self::alpha(step);
+        let (q_star, q) = (f64::from(q_expert), f64::from(q_learner));
+        let bar = match rule {
+            OracleRule::Authors => alpha * q_star,
+            OracleRule::SignAware => q_star - (1.0 - alpha) * q_star.abs(),
+        };
+        if bar < q {
+            Evaluation::Good
+        } else {
+            Evaluation::Bad
+        }
+    }
+}
+
+impl EvaluativeTrainer for ExpertOracle {
+    fn evaluate(&mut self, query: &EvaluativeQuery<'_>) -> Evaluation {
+        self.expert.act(query.obs, false, &mut self.expert_action);
+        let q_expert = self.expert.q_value(query.obs, &self.expert_action);
+        let q_learner = self.expert.q_value(query.obs, query.action);
+        Self::judge(self.rule, query.step, q_expert, q_learner)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn alpha_grows_to_one_over_100k_steps() {
+        assert_eq!(ExpertOracle::alpha(0), 0.999);
+        assert!((ExpertOracle::alpha(100_000) - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn authors_rule_on_positive_q_allows_a_small_margin() {
+        // alpha Q* = 0.999 * 100 = 99.9: 99.95 passes, 99.85 fails.
+        assert_eq!(
+            ExpertOracle::judge(OracleRule::Authors, 0, 100.0, 99.95),
+            Evaluation::Good
+        );
+        assert_eq!(
+            ExpertOracle::judge(OracleRule::Authors, 0, 100.0, 99.85),
+            Evaluation::Bad
+        );
+    }
+
+    #[test]
+    fn authors_rule_on_negative_q_is_stricter_than_the_expert_itself() {
+        // alpha Q* = -99.9 > Q* = -100: even the expert's own value is judged bad.
+        assert_eq!(
+            ExpertOracle::judge(OracleRule::Authors, 0, -100.0, -100.0),
+            Evaluation::Bad
+        );
+        assert_eq!(
+            ExpertOracle::judge(OracleRule::Authors, 0, -100.0, -99.8),
+            Evaluation::Good
+        );
+    }
+
+    #[test]
+    fn sign_aware_rule_keeps_the_margin_below_q_star() {
+        // bar = -100 - 0.001 * 100 = -100.1.
+        assert_eq!(
+            ExpertOracle::judge(OracleRule::SignAware, 0, -100.0, -100.0),
+            Evaluation::Good
+        );
+        assert_eq!(
+            ExpertOracle::judge(OracleRule::SignAware, 0, -100.0, -100.2),
+            Evaluation::Bad
+        );
+        assert_eq!(
+            ExpertOracle::judge(OracleRule::SignAware, 0, 100.0, 99.95),
+            ExpertOracle::judge(OracleRule::Authors, 0, 100.0, 99.95)
+        );
+    }
+
+    #[test]
+    fn the_bar_reaches_the_experts_own_value_late_in_a_run() {
+        assert_eq!(
+            ExpertOracle::judge(OracleRule::Authors, 100_000, 100.0, 99.99),
+            Evaluation::Bad
+        );
+        assert_eq!(
+            ExpertOracle::judge(OracleRule::Authors, 100_000, 100.0, 100.01),
+            Evaluation::Good
+        );
+    }
+}

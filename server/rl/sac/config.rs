@@ -1,0 +1,199 @@
+//! SAC's hyper-parameters, per task (`algorithms.md` section 1, from the authors' configs), and
+//! DREF's human critic (section 2), with `--set key=value` overrides.
+
+use serde::{Deserialize, Serialize};
+
+use crate::sim::Task;
+
+/// Everything that shapes one SAC learner. [`SacConfig::for_task`] gives the published values.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SacConfig {
+    /// Hidden layer sizes of the actor and of every critic (ReLU between layers).
+    pub hidden: Vec<usize>,
+    /// Adam's learning rate for the actor, the critics, the human critics and the temperature.
+    pub learning_rate: f32,
+    pub batch_size: usize,
+    /// Replay capacity (the caller owns the [`crate::rl::replay::ReplayBuffer`]; this is its size).
+    pub buffer_size: usize,
+    /// Polyak coefficient: `target = (1 - tau) target + tau online`.
+    pub tau: f32,
+    pub gamma: f32,
+    /// No update until the replay holds this many transitions (and at least one).
+    pub learning_starts: usize,
+    /// Gradient steps per call of [`crate::rl::sac::Sac::update`] (one per environment step).
+    pub gradient_steps: usize,
+    /// Initial entropy temperature alpha (SB3's `ent_coef = "auto_1.0"`).
+    pub init_ent_coef: f32,
+    /// `None`: SB3's default `-dim(A)`.
+    pub target_entropy: Option<f32>,
+    /// DREF's human critic H(s, a); `None` is plain SAC.
+    pub human_critic: Option<HumanCriticConfig>,
+}
+
+/// DREF's human critic: twin heads regressed on the immediate feedback H (Eq. 3) and mixed into
+/// the actor's objective (Eq. 5).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HumanCriticConfig {
+    /// Weight of H against Q in the actor loss (the authors: 9, as `0.1 Q + 0.9 H`).
+    pub lambda: f32,
+    pub mix: ActorMix,
+    /// `human_critic_mask` (our choice, `algorithms.md`): regress H only on rows that received feedback (H != 0).
+    /// The authors train on every sampled row, the H = 0 ones included (false).
+    pub mask: bool,
+}
+
+impl Default for HumanCriticConfig {
+    fn default() -> Self {
+        Self {
+            lambda: 9.0,
+            mix: ActorMix::Authors,
+            mask: false,
+        }
+    }
+}
+
+/// How the actor loss combines the environment critic Q and the human critic H.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ActorMix {
+    /// The authors' code (the published curves): head-wise
+    /// `min_j (Q_j + lambda H_j) / (1 + lambda)`, i.e. `min_j(0.1 Q_j + 0.9 H_j)` at lambda = 9.
+    Authors,
+    /// The paper's Eq. 5: `min_j Q_j + lambda min_j H_j`.
+    Paper,
+}
+
+impl SacConfig {
+    /// The per-task table of `algorithms.md` section 1, with DREF's human critic at its defaults.
+    pub fn for_task(task: Task) -> Self {
+        let (hidden, learning_rate) = match task {
+            Task::LunarLander => (vec![400, 300], 7.3e-4),
+            Task::Reaching => (vec![64, 64], 7.5e-4),
+            Task::Placing => (vec![128, 128], 7.5e-4),
+        };
+        Self {
+            hidden,
+            learning_rate,
+            batch_size: 512,
+            buffer_size: 1_000_000,
+            tau: 0.01,
+            gamma: 0.99,
+            learning_starts: 0,
+            gradient_steps: 1,
+            init_ent_coef: 1.0,
+            target_entropy: None,
+            human_critic: Some(HumanCriticConfig::default()),
+        }
+    }
+
+    /// One `--set key=value` override. `lambda`, `mix` and `human_critic_mask` switch the human
+    /// critic on (with defaults for the rest) if it was off.
+    pub fn set(&mut self, key: &str, value: &str) -> Result<(), String> {
+        let value = value.trim();
+        match key.trim() {
+            "hidden" => self.hidden = parse_hidden(value)?,
+            "learning_rate" => self.learning_rate = parse_positive(key, value)?,
+            "batch_size" => self.batch_size = parse_count(key, value)?,
+            "buffer_size" => self.buffer_size = parse_count(key, value)?,
+            "tau" => {
+                let tau = parse_f32(key, value)?;
+                if !(0.0..=1.0).contains(&tau) {
+                    return Err(format!("tau must lie in [0, 1], got {value}"));
+                }
+                self.tau = tau;
+            }
+            "gamma" => {
+                let gamma = parse_f32(key, value)?;
+                if !(0.0..=1.0).contains(&gamma) {
+                    return Err(format!("gamma must lie in [0, 1], got {value}"));
+                }
+                self.gamma = gamma;
+            }
+            "learning_starts" => self.learning_starts = parse_usize(key, value)?,
+            "gradient_steps" => self.gradient_steps = parse_usize(key, value)?,
+            "init_ent_coef" => self.init_ent_coef = parse_positive(key, value)?,
+            "target_entropy" => {
+                self.target_entropy = match value {
+                    "auto" | "none" => None,
+                    _ => Some(parse_f32(key, value)?),
+                }
+            }
+            "human_critic" => {
+                self.human_critic = match parse_bool(key, value)? {
+                    true => Some(self.human_critic.clone().unwrap_or_default()),
+                    false => None,
+                }
+            }
+            "lambda" => {
+                let lambda = parse_f32(key, value)?;
+                if lambda < 0.0 {
+                    return Err(format!("lambda must be >= 0, got {value}"));
+                }
+                self.human_critic.get_or_insert_default().lambda = lambda;
+            }
+            "mix" => {
+                self.human_critic.get_or_insert_default().mix = match value {
+                    "authors" => ActorMix::Authors,
+                    "paper" => ActorMix::Paper,
+                    _ => return Err(format!("mix must be authors or paper, got {value:?}")),
+                }
+            }
+            "human_critic_mask" => {
+                self.human_critic.get_or_insert_default().mask = parse_bool(key, value)?;
+            }
+            other => {
+                return Err(format!(
+                    "unknown SAC setting {other:?}; known: hidden, learning_rate, batch_size, \
+                     buffer_size, tau, gamma, learning_starts, gradient_steps, init_ent_coef, \
+                     target_entropy, human_critic, lambda, mix, human_critic_mask"
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+fn parse_f32(key: &str, value: &str) -> Result<f32, String> {
+    match value.parse::<f32>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(format!("{key} must be a finite number, got {value:?}")),
+    }
+}
+
+fn parse_positive(key: &str, value: &str) -> Result<f32, String> {
+    match parse_f32(key, value)? {
+        v if v > 0.0 => Ok(v),
+        _ => Err(format!("{key} must be > 0, got {value}")),
+    }
+}
+
+fn parse_usize(key: &str, value: &str) -> Result<usize, String> {
+    value
+        .parse::<usize>()
+        .map_err(|_| format!("{key} must be a whole number >= 0, got {value:?}"))
+}
+
+fn parse_count(key: &str, value: &str) -> Result<usize, String> {
+    match parse_usize(key, value)? {
+        0 => Err(format!("{key} must be at least 1")),
+        n => Ok(n),
+    }
+}
+
+fn parse_bool(key: &str, value: &str) -> Result<bool, String> {
+    match value {
+        "true" => Ok(true),
+        "false" => Ok(false),
+        _ => Err(format!("{key} must be true or false, got {value:?}")),
+    }
+}
+
+fn parse_hidden(value: &str) -> Result<Vec<usize>, String> {
+    let sizes: Result<Vec<usize>, _> = value.split(',').map(|s| s.trim().parse()).collect();
+    match sizes {
+        Ok(sizes) if sizes.iter().all(|&n| n > 0) => Ok(sizes),
+        _ => Err(format!(
+            "hidden must be comma-separated positive layer sizes such as 256,256, got {value:?}"
+        )),
+    }
+}

@@ -1,0 +1,102 @@
+//! `Sac::update` allocates nothing of its own: with a counting global allocator (its own test
+//! binary), the only allocations during updates are matrixmultiply's packing buffers, exactly
+//! one per matrix product, all freed again (see `rl_no_alloc.rs` for the same on bare MLPs).
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+use dualrep::rl::replay::{ReplayBuffer, Transition};
+use dualrep::rl::sac::{HumanCriticConfig, Sac, SacConfig};
+use dualrep::sim::Task;
+
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+    static LIVE_BYTES: Cell<isize> = const { Cell::new(0) };
+}
+
+// SAFETY: defers to the system allocator; the thread-local counters are const-initialised
+// `Cell`s without destructors, so touching them never allocates or re-enters the allocator.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.with(|n| n.set(n.get() + 1));
+        LIVE_BYTES.with(|b| b.set(b.get() + layout.size() as isize));
+        unsafe { System.alloc(layout) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        LIVE_BYTES.with(|b| b.set(b.get() - layout.size() as isize));
+        unsafe { System.dealloc(ptr, layout) }
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.with(|n| n.set(n.get() + 1));
+        LIVE_BYTES.with(|b| b.set(b.get() + new_size as isize - layout.size() as isize));
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn count(f: impl FnOnce()) -> (usize, isize) {
+    let (n0, b0) = (ALLOCATIONS.with(Cell::get), LIVE_BYTES.with(Cell::get));
+    f();
+    (
+        ALLOCATIONS.with(Cell::get) - n0,
+        LIVE_BYTES.with(Cell::get) - b0,
+    )
+}
+
+/// Matrix products of one gradient step with `layers` linear layers per network: forward
+/// passes `layers` each, a backward pass with parameter gradients `2 layers - 1`, an
+/// input-gradient-only pass `layers`.
+fn products_per_step(layers: usize, human: bool) -> usize {
+    let (forward, backward, backward_input) = (layers, 2 * layers - 1, layers);
+    let twins = if human { 4 } else { 2 };
+    forward // actor at s
+        + forward + 2 * forward // actor at s', both target critics
+        + 2 * (forward + backward) // critics
+        + if human { 2 * (forward + backward) } else { 0 } // human critics
+        + twins * (forward + backward_input) // critics in the actor loss
+        + backward // actor
+}
+
+#[test]
+fn updates_allocate_only_sgemm_packing_buffers() {
+    for human in [false, true] {
+        let mut config = SacConfig::for_task(Task::Reaching);
+        config.hidden = vec![16, 8];
+        config.batch_size = 32;
+        config.gradient_steps = 3;
+        config.human_critic = human.then(|| HumanCriticConfig {
+            mask: true,
+            ..HumanCriticConfig::default()
+        });
+        let mut sac = Sac::new(4, 2, config, 0);
+        let mut replay = ReplayBuffer::new(100, 4, 2);
+        for i in 0..100 {
+            let x = i as f32 / 100.0;
+            replay.push(Transition {
+                obs: &[x, -x, 0.5, 1.0],
+                action: &[x, 0.0],
+                reward: x,
+                human: [1.0, -1.0][i % 2],
+                next_obs: &[x, x, 0.5, 1.0],
+                terminated: i % 10 == 0,
+            });
+        }
+        sac.update(&replay).unwrap(); // first use
+        let (allocations, live) = count(|| {
+            sac.update(&replay).unwrap();
+            sac.update(&replay).unwrap();
+        });
+        assert_eq!(
+            allocations,
+            2 * 3 * products_per_step(3, human),
+            "human critic {human}"
+        );
+        assert_eq!(live, 0, "nothing kept");
+    }
+}
