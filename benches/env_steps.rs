@@ -38,5 +38,11 @@ fn env_steps(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, env_steps);
+criterion_group! {
+    name = benches;
+    // No HTML plots: criterion's plotters output needs system fonts, which a server may lack
+    // (and this crate's plotters is built with embedded fonts only).
+    config = Criterion::default().without_plots();
+    targets = env_steps
+}
 criterion_main!(benches);
