@@ -14,15 +14,18 @@
 //!   Lunar Lander (rapier2d, Gymnasium's semantics); heuristic controllers; rollouts.
 //! - [`scene_graph`]: each task's predicates, evaluated on `(s_{t+1}, a_t)` into an
 //!   `AbstractState` bit vector.
-//! - [`rl`]: SAC's parts: MLPs on nalgebra with a hand-written backward pass, Adam, losses,
-//!   the tanh-squashed Gaussian policy, the replay buffer.
-//! - [`guidance`]: when to ask (DREF's UCB query rule, EF-p%) and, later, what to ask (DRPL).
-//! - [`report`]: the paper's Figures 3 and 5: the run grid, aggregation over seeds, `table.md`,
-//!   SVG and PNG figures (aggregation and tables are pure; reading runs and drawing are the IO).
+//! - [`rl`]: MLPs on nalgebra with a hand-written backward pass, Adam, losses, the
+//!   tanh-squashed Gaussian policy, the replay buffer, and SAC with DREF's twin human critic
+//!   (checkpoints as safetensors bytes).
+//! - [`guidance`]: when to ask (DREF's UCB query rule, EF-p%), who answers (the
+//!   `EvaluativeTrainer` trait, the expert oracle), the evaluative training loop; later, what
+//!   to ask (DRPL).
 //!
-//! The edge:
+//! The edge (files and processes):
 //!
-//! - [`cli`]: the `dualrep` command line (`sim` today).
+//! - [`report`]: the paper's Figures 3 and 5: the run grid and its child processes, aggregation
+//!   over seeds, `table.md`, SVG and PNG figures (aggregation and tables are pure functions).
+//! - [`cli`]: the `dualrep` command line: `sim`, `train`, `expert`, `reproduce`, `bench`.
 
 pub mod cli;
 pub mod guidance;
