@@ -89,8 +89,7 @@ pub fn run(args: ExpertArgs) -> anyhow::Result<()> {
         wall_seconds: start.elapsed().as_secs_f64(),
         config,
     };
-    let json = serde_json::to_vec_pretty(&note)?;
-    write_atomically(&args.out.with_extension("json"), &json)?;
-    println!("{}", String::from_utf8(json)?);
+    write_atomically(&args.out.with_extension("json"), &serde_json::to_vec_pretty(&note)?)?;
+    println!("{}", serde_json::to_string(&note)?);
     Ok(())
 }

@@ -1,0 +1,159 @@
+//! `dualrep expert` then `dualrep train` end to end on a tiny budget (seconds, not minutes):
+//! the files `reproduce` reads, the feedback accounting, and clear errors on bad input.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn dualrep(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_dualrep"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("binary runs")
+}
+
+fn ok(out: &Output) -> serde_json::Value {
+    assert!(
+        out.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(
+        out.stdout
+            .rsplit(|&b| b == b'\n')
+            .find(|l| !l.is_empty())
+            .unwrap(),
+    )
+    .unwrap()
+}
+
+const TINY: [&str; 4] = ["--set", "hidden=16,16", "--set", "batch_size=32"];
+
+#[test]
+fn an_expert_trains_and_drives_dref_and_ef_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut args = vec![
+        "expert",
+        "--task",
+        "reaching",
+        "--steps",
+        "300",
+        "--eval-episodes",
+        "2",
+        "--out",
+        "models/reaching.safetensors",
+    ];
+    args.extend(TINY);
+    let note = ok(&dualrep(&args, d));
+    assert_eq!(note["steps"], 300);
+    assert!(d.join("models/reaching.safetensors").is_file());
+    assert!(d.join("models/reaching.json").is_file());
+
+    for (method, steps) in [("dref", 400), ("ef-100", 150), ("sac", 150)] {
+        let out_dir = format!("runs/{method}");
+        let steps_s = steps.to_string();
+        let mut args = vec![
+            "train", "--task", "reaching", "--method", method, "--steps", &steps_s, "--seed", "4",
+            "--out", &out_dir,
+        ];
+        args.extend(TINY);
+        let summary = ok(&dualrep(&args, d));
+        let written: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(d.join(&out_dir).join("summary.json")).unwrap())
+                .unwrap();
+        assert_eq!(written["steps"], steps);
+        assert_eq!(written["cumulative_return"], summary["cumulative_return"]);
+        for field in [
+            "task",
+            "method",
+            "seed",
+            "feedback_count",
+            "feedback_fraction",
+            "final_mean_return",
+            "wall_seconds",
+            "updates_per_second",
+        ] {
+            assert!(!written[field].is_null(), "{method}: {field} missing");
+        }
+        let fraction = written["feedback_fraction"].as_f64().unwrap();
+        match method {
+            "ef-100" => assert_eq!(fraction, 1.0),
+            "sac" => assert_eq!(fraction, 0.0),
+            _ => assert!(fraction > 0.0 && fraction <= 1.0),
+        }
+        let csv = std::fs::read_to_string(d.join(&out_dir).join("metrics.csv")).unwrap();
+        let mut lines = csv.lines();
+        assert_eq!(
+            lines.next(),
+            Some("step,episode,return,cumulative_return,feedback_count,feedback_fraction")
+        );
+        let mut last_cumulative = 0.0;
+        for line in lines {
+            let cols: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
+            assert_eq!(cols.len(), 6);
+            assert!(
+                (cols[3] - (last_cumulative + cols[2])).abs() < 1e-6,
+                "cumulative column adds returns"
+            );
+            last_cumulative = cols[3];
+        }
+    }
+}
+
+#[test]
+fn bad_input_is_refused_with_a_clear_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let refused = |args: &[&str], needle: &str| {
+        let out = dualrep(args, d);
+        assert!(!out.status.success(), "{args:?} accepted");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(needle), "{args:?}: {err}");
+    };
+    refused(
+        &[
+            "train", "--task", "reaching", "--method", "dref", "--out", "x",
+        ],
+        "dualrep expert --task reaching",
+    );
+    refused(
+        &[
+            "train", "--task", "reaching", "--method", "ef-0", "--out", "x",
+        ],
+        "EF percentage",
+    );
+    refused(
+        &[
+            "train", "--task", "reaching", "--method", "sac", "--set", "hiden=3", "--out", "x",
+        ],
+        "hiden",
+    );
+    refused(
+        &[
+            "train", "--task", "reaching", "--method", "sac", "--set", "gamma", "--out", "x",
+        ],
+        "key=value",
+    );
+    refused(
+        &[
+            "train", "--task", "reaching", "--method", "sac", "--steps", "0", "--out", "x",
+        ],
+        "--steps",
+    );
+    std::fs::write(d.join("broken.safetensors"), b"not a checkpoint").unwrap();
+    refused(
+        &[
+            "train",
+            "--task",
+            "reaching",
+            "--method",
+            "dref",
+            "--expert",
+            "broken.safetensors",
+            "--out",
+            "x",
+        ],
+        "loading the expert broken.safetensors",
+    );
+}
