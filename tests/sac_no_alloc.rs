@@ -2,52 +2,17 @@
 //! binary), the only allocations during updates are matrixmultiply's packing buffers, exactly
 //! one per matrix product, all freed again (see `rl_no_alloc.rs` for the same on bare MLPs).
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-
 use dualrep::rl::replay::{ReplayBuffer, Transition};
 use dualrep::rl::sac::{HumanCriticConfig, Sac, SacConfig};
 use dualrep::sim::Task;
 
-struct Counting;
+#[path = "support/counting_alloc.rs"]
+mod counting_alloc;
 
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-    static LIVE_BYTES: Cell<isize> = const { Cell::new(0) };
-}
-
-// SAFETY: defers to the system allocator; the thread-local counters are const-initialised
-// `Cell`s without destructors, so touching them never allocates or re-enters the allocator.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.with(|n| n.set(n.get() + 1));
-        LIVE_BYTES.with(|b| b.set(b.get() + layout.size() as isize));
-        unsafe { System.alloc(layout) }
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        LIVE_BYTES.with(|b| b.set(b.get() - layout.size() as isize));
-        unsafe { System.dealloc(ptr, layout) }
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.with(|n| n.set(n.get() + 1));
-        LIVE_BYTES.with(|b| b.set(b.get() + new_size as isize - layout.size() as isize));
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
+use counting_alloc::{Counting, count};
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
-
-fn count(f: impl FnOnce()) -> (usize, isize) {
-    let (n0, b0) = (ALLOCATIONS.with(Cell::get), LIVE_BYTES.with(Cell::get));
-    f();
-    (
-        ALLOCATIONS.with(Cell::get) - n0,
-        LIVE_BYTES.with(Cell::get) - b0,
-    )
-}
 
 /// Matrix products of one gradient step with `layers` linear layers per network: forward
 /// passes `layers` each, a backward pass with parameter gradients `2 layers - 1`, an
