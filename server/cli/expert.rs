@@ -26,12 +26,8 @@ pub struct ExpertArgs {
     /// with the extension .json; training metrics go to a folder with the extension .train).
     #[arg(long)]
     pub out: PathBuf,
-    /// Override a hyper-parameter, e.g. `--set hidden=256,256 --set batch_size=256`.
-    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = overrides::parse_pair)]
-    pub overrides: Vec<(String, String)>,
-    /// A TOML file of `key = value` overrides, applied before `--set`.
-    #[arg(long)]
-    pub config: Option<PathBuf>,
+    #[command(flatten)]
+    pub overrides: overrides::OverrideArgs,
     /// Episodes of the deterministic policy evaluated at the end.
     #[arg(long, default_value_t = 20)]
     pub eval_episodes: u32,
@@ -55,13 +51,7 @@ struct ExpertNote {
 }
 
 pub fn run(args: ExpertArgs) -> anyhow::Result<()> {
-    let config = resolve_config(
-        args.task,
-        EvaluativeMethod::Sac,
-        args.seed,
-        args.config.as_deref(),
-        &args.overrides,
-    )?;
+    let config = resolve_config(args.task, EvaluativeMethod::Sac, args.seed, &args.overrides)?;
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
@@ -89,7 +79,10 @@ pub fn run(args: ExpertArgs) -> anyhow::Result<()> {
         wall_seconds: start.elapsed().as_secs_f64(),
         config,
     };
-    write_atomically(&args.out.with_extension("json"), &serde_json::to_vec_pretty(&note)?)?;
+    write_atomically(
+        &args.out.with_extension("json"),
+        &serde_json::to_vec_pretty(&note)?,
+    )?;
     println!("{}", serde_json::to_string(&note)?);
     Ok(())
 }

@@ -1,13 +1,25 @@
 //! Hyper-parameter overrides for `train` and `expert`: `--set key=value` (repeatable) and a
 //! TOML file of `key = value` lines, applied to a run's config in that order.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
+use clap::Args;
 
 use crate::guidance::evaluative_run::EvaluativeRunConfig;
 use crate::guidance::query_rule::UcbForm;
 use crate::scene_graph::SceneGraph;
+
+/// The override flags `train` and `expert` share.
+#[derive(Debug, Args)]
+pub struct OverrideArgs {
+    /// Override a hyper-parameter, e.g. `--set hidden=256,256 --set c=0.3` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_pair)]
+    pub overrides: Vec<(String, String)>,
+    /// A TOML file of `key = value` overrides, applied before `--set`.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+}
 
 /// One `key=value` pair, split at the first `=`.
 pub fn parse_pair(s: &str) -> Result<(String, String), String> {

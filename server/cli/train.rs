@@ -36,12 +36,8 @@ pub struct TrainArgs {
     /// Output directory (created).
     #[arg(long)]
     pub out: PathBuf,
-    /// Override a hyper-parameter, e.g. `--set hidden=256,256 --set c=0.3` (repeatable).
-    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = overrides::parse_pair)]
-    pub overrides: Vec<(String, String)>,
-    /// A TOML file of `key = value` overrides, applied before `--set`.
-    #[arg(long)]
-    pub config: Option<PathBuf>,
+    #[command(flatten)]
+    pub overrides: overrides::OverrideArgs,
     /// The expert the synthetic trainer consults [default: models/<task>.safetensors].
     #[arg(long)]
     pub expert: Option<PathBuf>,
@@ -94,15 +90,14 @@ pub fn resolve_config(
     task: Task,
     method: EvaluativeMethod,
     seed: u64,
-    file: Option<&Path>,
-    sets: &[(String, String)],
+    args: &overrides::OverrideArgs,
 ) -> anyhow::Result<EvaluativeRunConfig> {
     let mut config = EvaluativeRunConfig::new(task, method, seed);
-    let from_file = match file {
+    let from_file = match &args.config {
         Some(path) => overrides::read_toml(path)?,
         None => Vec::new(),
     };
-    for (k, v) in from_file.iter().chain(sets) {
+    for (k, v) in from_file.iter().chain(&args.overrides) {
         overrides::apply(&mut config, k, v).map_err(anyhow::Error::msg)?;
     }
     Ok(config)
@@ -190,13 +185,7 @@ pub fn final_performance(episodes: &[EpisodeRecord], n: usize) -> (f64, f64) {
 }
 
 pub fn run(args: TrainArgs) -> anyhow::Result<()> {
-    let config = resolve_config(
-        args.task,
-        args.method,
-        args.seed,
-        args.config.as_deref(),
-        &args.overrides,
-    )?;
+    let config = resolve_config(args.task, args.method, args.seed, &args.overrides)?;
     let mut trainer: Box<dyn EvaluativeTrainer> = match args.method {
         EvaluativeMethod::Sac => Box::new(NoTrainer),
         _ => {
