@@ -6,7 +6,9 @@
 //! - `evaluative_trainer`: the `EvaluativeTrainer` trait (synthetic oracle or a person) and H.
 //! - `expert_oracle`: the synthetic trainer, a SAC expert's critic judging the learner's action.
 //! - `evaluative_run`: one SAC / EF-p% / DREF run, step by step, and policy evaluation.
+//! - `drpl`: DRPL's belief over the reward weights (APReL's sampling-based belief) and acquisition.
 
+pub mod drpl;
 pub mod evaluative_run;
 pub mod evaluative_trainer;
 pub mod expert_oracle;
