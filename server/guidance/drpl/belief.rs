@@ -13,16 +13,20 @@
 //!   `burn_in + thinning * samples - 1` proposals and keeps the states after `burn_in`,
 //!   `burn_in + thinning`, ... proposals (APReL's `samples[burnin::thin]`).
 //!
-//! Where we differ, for speed only: every answer is stored once as a reward-difference row
-//! (scaled by beta, signed so that strict answers read "chosen minus other") in one contiguous
-//! buffer, so a proposal's log-likelihood is one pass over `N x D` numbers, and the chain
-//! allocates nothing per proposal. Randomness is consumed only by [`Belief::new`] and
+//! Where we differ, for speed only: every answer is stored once as a reward-difference row in
+//! one contiguous buffer (`answers`), so a proposal's log-likelihood is one pass over `N x D`
+//! numbers that stops early once rejection is certain, and the chain allocates nothing per
+//! proposal. Randomness is consumed only by [`Belief::new`] and
 //! [`Belief::update`], never by recording or forgetting answers.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
+
+mod answers;
+
+use answers::Answers;
 
 /// Slack on the prior's `||theta|| <= 1`: a renormalised proposal can have norm 1 + 1 ulp.
 const PRIOR_SLACK: f64 = 1e-9;
@@ -121,89 +125,6 @@ pub enum Response {
     Equal,
 }
 
-/// How a stored difference row enters the likelihood.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Kind {
-    /// Row = beta * (chosen - other): `log P = -softplus(-theta . row)`.
-    Strict,
-    /// Row = beta * (first - second): the weak-comparison "equal" term.
-    Equal,
-}
-
-/// The recorded answers as one row-major `N x D` buffer of scaled, signed differences.
-#[derive(Clone, Debug)]
-struct Answers {
-    dim: usize,
-    beta: f64,
-    delta: f64,
-    /// `log(e^{2 delta} - 1)`, the constant of each "equal" term.
-    log_equal: f64,
-    rows: Vec<f64>,
-    kinds: Vec<Kind>,
-    equal_count: usize,
-}
-
-impl Answers {
-    fn push(&mut self, a: &[f64], b: &[f64], response: Response) {
-        let (chosen, other, kind) = match response {
-            Response::First => (a, b, Kind::Strict),
-            Response::Second => (b, a, Kind::Strict),
-            Response::Equal => (a, b, Kind::Equal),
-        };
-        let beta = self.beta;
-        self.rows
-            .extend(chosen.iter().zip(other).map(|(c, o)| beta * (c - o)));
-        self.kinds.push(kind);
-        self.equal_count += usize::from(kind == Kind::Equal);
-    }
-
-    fn remove(&mut self, index: usize) {
-        let kind = self.kinds.remove(index);
-        self.equal_count -= usize::from(kind == Kind::Equal);
-        self.rows.drain(index * self.dim..(index + 1) * self.dim);
-    }
-
-    /// Sum of the answers' log-probabilities at theta, in one pass over the rows.
-    ///
-    /// Each term is `-(max(z, 0) + ln(1 + e^{-|z|}))` (a stable softplus); the hinge parts are
-    /// summed and the `1 + e^{-|z|}` factors (each in (1, 2]) multiplied, so a proposal costs
-    /// one `exp` per softplus and one `ln` per 256 answers instead of an `ln_1p` per answer.
-    fn log_likelihood(&self, theta: &[f64]) -> f64 {
-        let delta = self.delta;
-        let (mut hinge, mut logs, mut product) = (0.0, 0.0, 1.0);
-        for (i, (row, kind)) in self
-            .rows
-            .chunks_exact(self.dim)
-            .zip(&self.kinds)
-            .enumerate()
-        {
-            let x: f64 = row.iter().zip(theta).map(|(r, t)| r * t).sum();
-            match kind {
-                Kind::Strict => {
-                    hinge += (-x).max(0.0);
-                    product *= 1.0 + (-x.abs()).exp();
-                }
-                Kind::Equal => {
-                    let (z1, z2) = (delta - x, delta + x);
-                    hinge += z1.max(0.0) + z2.max(0.0);
-                    product *= (1.0 + (-z1.abs()).exp()) * (1.0 + (-z2.abs()).exp());
-                }
-            }
-            // At most 4 per answer: 4^256 = 2^512 is far from overflow.
-            if i % 256 == 255 {
-                logs += product.ln();
-                product = 1.0;
-            }
-        }
-        let constant = if self.equal_count == 0 {
-            0.0 // avoids 0 * -inf when delta = 0 and no "equal" answer exists
-        } else {
-            self.equal_count as f64 * self.log_equal
-        };
-        constant - hinge - logs - product.ln()
-    }
-}
-
 /// A set of posterior samples of theta and the answers that define the posterior.
 #[derive(Clone, Debug)]
 pub struct Belief {
@@ -233,15 +154,7 @@ impl Belief {
             dim,
             config,
             rng,
-            answers: Answers {
-                dim,
-                beta: config.beta,
-                delta: config.delta,
-                log_equal: log_equal_constant(config.delta),
-                rows: Vec::new(),
-                kinds: Vec::new(),
-                equal_count: 0,
-            },
+            answers: Answers::new(dim, &config),
             samples,
             current: vec![0.0; dim],
             proposal: vec![0.0; dim],
@@ -257,7 +170,7 @@ impl Belief {
     }
 
     pub fn answers(&self) -> usize {
-        self.answers.kinds.len()
+        self.answers.len()
     }
 
     /// Record an answer on features a (first) and b (second); does not resample.
@@ -314,15 +227,21 @@ impl Belief {
                     *p = c + proposal_std * self.rng.sample::<f64, _>(StandardNormal);
                 }
                 normalise(&mut self.proposal);
-                let uniform: f64 = self.rng.random();
+                // APReL accepts iff ln(u) < next - current; we draw u first and test
+                // next > current + ln(u), so the likelihood pass can stop as soon as its
+                // partial sum (an upper bound) is below that floor: same decisions, less work.
+                let floor = current_logprob + self.rng.random::<f64>().ln();
                 let prior = log_prior(&self.proposal);
                 // Skip the likelihood outside the prior: the proposal is rejected either way.
                 let proposal_logprob = if prior.is_finite() {
-                    prior + self.answers.log_likelihood(&self.proposal)
+                    prior
+                        + self
+                            .answers
+                            .log_likelihood_above(&self.proposal, floor - prior)
                 } else {
                     f64::NEG_INFINITY
                 };
-                if uniform.ln() < proposal_logprob - current_logprob {
+                if proposal_logprob > floor {
                     std::mem::swap(&mut self.current, &mut self.proposal);
                     current_logprob = proposal_logprob;
                 }
@@ -405,7 +324,8 @@ fn normalise(v: &mut [f64]) -> bool {
     if !(norm.is_finite() && norm > 0.0) {
         return false;
     }
-    v.iter_mut().for_each(|e| *e /= norm);
+    let inverse = 1.0 / norm; // one division, not D: this runs once per proposal
+    v.iter_mut().for_each(|e| *e *= inverse);
     true
 }
 
