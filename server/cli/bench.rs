@@ -6,6 +6,9 @@
 //! sgemm_gflops`: how close the whole update (products, elementwise work, sampling, Adam) comes
 //! to running nothing but large matrix products. `benches/reference/torch_sac_update.py` times
 //! the same update in PyTorch.
+//!
+//! `dualrep bench belief`: milliseconds per DRPL belief update (one Metropolis-Hastings chain)
+//! on random answers; `benches/reference/aprel_belief.py` times APReL's algorithm in numpy.
 
 use std::time::{Duration, Instant};
 
@@ -13,8 +16,10 @@ use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
 use serde::Serialize;
 
+use crate::guidance::drpl::belief::{Belief, BeliefConfig, Response};
 use crate::rl::replay::{ReplayBuffer, Transition};
 use crate::rl::sac::{Sac, SacConfig, mflop_per_update};
 use crate::sim::Task;
@@ -29,6 +34,32 @@ pub struct BenchArgs {
 pub enum BenchWhat {
     /// Gradient steps per second of DREF's SAC update, against the sgemm peak.
     Sac(SacBenchArgs),
+    /// Milliseconds per DRPL belief update (2199 Metropolis-Hastings proposals).
+    Belief(BeliefBenchArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct BeliefBenchArgs {
+    /// Reward features D (theta's dimension).
+    #[arg(long, default_value_t = 6)]
+    pub features: usize,
+    /// Recorded answers N.
+    #[arg(long, default_value_t = 40)]
+    pub answers: usize,
+    /// Timed updates; the median is reported.
+    #[arg(long, default_value_t = 50)]
+    pub repeats: usize,
+}
+
+#[derive(Serialize)]
+struct BeliefBench {
+    features: usize,
+    answers: usize,
+    proposals: usize,
+    repeats: usize,
+    median_ms: f64,
+    mean_ms: f64,
+    min_ms: f64,
 }
 
 #[derive(Debug, Args)]
@@ -66,6 +97,7 @@ struct SacBench {
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     match args.what {
         BenchWhat::Sac(args) => bench_sac(args),
+        BenchWhat::Belief(args) => bench_belief(args),
     }
 }
 
@@ -136,6 +168,66 @@ fn bench_sac(args: SacBenchArgs) -> anyhow::Result<()> {
         gflops,
         sgemm_gflops,
         fraction_of_sgemm: gflops / sgemm_gflops,
+    };
+    println!("{}", serde_json::to_string(&report)?);
+    Ok(())
+}
+
+/// Times `Belief::update` on N pairs of standard-normal features (DRPL standardises its
+/// segment features) answered by the deterministic oracle of a random theta, after one
+/// warm-up update.
+fn bench_belief(args: BeliefBenchArgs) -> anyhow::Result<()> {
+    if args.features == 0 || args.repeats == 0 {
+        bail!("--features and --repeats must be positive");
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    let theta: Vec<f64> = (0..args.features)
+        .map(|_| rng.sample(StandardNormal))
+        .collect();
+    let config = BeliefConfig::default();
+    let mut belief = Belief::new(args.features, config, 0);
+    for _ in 0..args.answers {
+        let a: Vec<f64> = (0..args.features)
+            .map(|_| rng.sample(StandardNormal))
+            .collect();
+        let b: Vec<f64> = (0..args.features)
+            .map(|_| rng.sample(StandardNormal))
+            .collect();
+        let gap: f64 = theta
+            .iter()
+            .zip(a.iter().zip(&b))
+            .map(|(t, (x, y))| t * (x - y))
+            .sum();
+        let response = if gap > 0.0 {
+            Response::First
+        } else {
+            Response::Second
+        };
+        belief.add_answer(&a, &b, response);
+    }
+    belief.update(); // warm-up
+    let mut times: Vec<f64> = (0..args.repeats)
+        .map(|_| {
+            let start = Instant::now();
+            belief.update();
+            start.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    std::hint::black_box(belief.mean());
+    times.sort_by(f64::total_cmp);
+    let median = if times.len() % 2 == 1 {
+        times[times.len() / 2]
+    } else {
+        (times[times.len() / 2 - 1] + times[times.len() / 2]) / 2.0
+    };
+    let report = BeliefBench {
+        features: args.features,
+        answers: args.answers,
+        proposals: config.proposals(),
+        repeats: args.repeats,
+        median_ms: median,
+        mean_ms: times.iter().sum::<f64>() / times.len() as f64,
+        min_ms: times[0],
     };
     println!("{}", serde_json::to_string(&report)?);
     Ok(())

@@ -31,7 +31,7 @@ pub enum Command {
     Expert(expert::ExpertArgs),
     /// Run the paper's Figure 3 or 5 grid as parallel processes; write table.md and figures.
     Reproduce(reproduce::ReproduceArgs),
-    /// Time the learner: `bench sac` prints updates per second against the sgemm peak.
+    /// Time the learner: `bench sac` (updates per second against the sgemm peak), `bench belief`.
     Bench(bench::BenchArgs),
 }
 
