@@ -1,0 +1,342 @@
+//! One preference-learning run (algorithms.md section 3): record random trajectories, segment
+//! them, then per query pick a pair, ask the trainer, and update the belief over theta. The CLI
+//! drives it to a query budget; a server session can drive it one query at a time.
+//!
+//! Every random choice comes from the run's seed, each purpose on its own ChaCha stream, so that
+//! the trajectories and theta_true of a seed are the same for every method: Figure 5's methods
+//! are compared on the same data and the same true reward.
+
+use std::time::Instant;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use super::acquisition::Acquisition;
+use super::belief::{Belief, BeliefConfig, Response, random_unit_vector};
+use super::pool::QueryPool;
+use super::segments::DEFAULT_MIN_RUN;
+use super::selection::{QueryMethod, QueryPair, Selector};
+use super::trainer::{Preference, PreferenceQuery, PreferenceTrainer};
+use super::trajectories::{self, DEFAULT_TRAJECTORIES};
+use crate::scene_graph::SceneGraph;
+use crate::sim::Task;
+
+/// ChaCha streams of a run's seed (stream 1 is `trajectories::rng`).
+const THETA_STREAM: u64 = 2;
+const SELECTION_STREAM: u64 = 3;
+const BELIEF_STREAM: u64 = 4;
+
+/// Everything that defines a run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PreferenceRunConfig {
+    pub task: Task,
+    pub method: QueryMethod,
+    pub seed: u64,
+    /// Random-policy trajectories recorded.
+    pub trajectories: usize,
+    /// Step limit per trajectory.
+    pub max_steps: usize,
+    /// Runs of g shorter than this merge into a neighbouring segment.
+    pub min_run: usize,
+    pub acquisition: Acquisition,
+    pub belief: BeliefConfig,
+    pub scene_graph: SceneGraph,
+}
+
+impl PreferenceRunConfig {
+    /// algorithms.md's defaults for `task` and `method`, uniform acquisition (the paper's).
+    pub fn new(task: Task, method: QueryMethod, seed: u64) -> Self {
+        Self {
+            task,
+            method,
+            seed,
+            trajectories: DEFAULT_TRAJECTORIES,
+            max_steps: trajectories::max_steps(task),
+            min_run: DEFAULT_MIN_RUN,
+            acquisition: Acquisition::Uniform,
+            belief: BeliefConfig::default(),
+            scene_graph: SceneGraph::for_task(task),
+        }
+    }
+
+    /// Override one setting by name (the CLI's `--set key=value`).
+    pub fn set(&mut self, key: &str, value: &str) -> Result<(), String> {
+        let bad = |what: &str| format!("{key}={value}: expected {what}");
+        let count = |min: usize| -> Result<usize, String> {
+            value
+                .parse::<usize>()
+                .ok()
+                .filter(|&n| n >= min)
+                .ok_or_else(|| bad(&format!("an integer >= {min}")))
+        };
+        let number = || -> Result<f64, String> {
+            value
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| bad("a finite number"))
+        };
+        match key {
+            "trajectories" => self.trajectories = count(2)?,
+            "max_steps" => self.max_steps = count(1)?,
+            "min_run" => self.min_run = count(1)?,
+            "acquisition" => {
+                self.acquisition = match value {
+                    "uniform" => Acquisition::Uniform,
+                    "mutual-information" | "mutual_information" => Acquisition::MutualInformation,
+                    _ => return Err(bad("uniform or mutual-information")),
+                }
+            }
+            "beta" => self.belief.beta = number()?,
+            "delta" => self.belief.delta = number()?,
+            "proposal_std" => self.belief.proposal_std = number()?,
+            "burn_in" => self.belief.burn_in = count(0)?,
+            "thinning" => self.belief.thinning = count(1)?,
+            "samples" => self.belief.samples = count(1)?,
+            "side_engines_on_a0" => {
+                let on: bool = value.parse().map_err(|_| bad("true or false"))?;
+                match &mut self.scene_graph {
+                    SceneGraph::LunarLander { side_engines_on_a0 } => *side_engines_on_a0 = on,
+                    _ => return Err(format!("{key} applies to lunar-lander only")),
+                }
+            }
+            _ => {
+                return Err(format!(
+                    "unknown setting {key:?} for prefs: expected trajectories, max_steps, \
+                     min_run, acquisition, beta, delta, proposal_std, burn_in, thinning, \
+                     samples or side_engines_on_a0"
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// What one query did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct QueryReport {
+    /// Queries asked so far, this one included (the row of `alignment.csv`).
+    pub query: usize,
+    pub pair: QueryPair,
+    pub preference: Preference,
+    /// The belief's alignment with theta_true after this answer.
+    pub alignment: f64,
+    pub alignment_of_mean: f64,
+    /// Wall time of the belief update in milliseconds; `None` for a skipped query.
+    pub update_ms: Option<f64>,
+}
+
+pub struct PreferenceRun {
+    config: PreferenceRunConfig,
+    pool: QueryPool,
+    selector: Selector,
+    belief: Belief,
+    theta_true: Vec<f64>,
+    queries: usize,
+}
+
+impl PreferenceRun {
+    /// Record the trajectories (seconds for Lunar Lander) and set up the run.
+    pub fn new(config: PreferenceRunConfig) -> Self {
+        let trajs = trajectories::collect(
+            config.task,
+            &config.scene_graph,
+            config.trajectories,
+            config.max_steps,
+            &mut trajectories::rng(config.seed),
+        );
+        let pool = QueryPool::from_trajectories(config.task, &trajs, config.min_run);
+        Self::with_pool(config, pool)
+    }
+
+    /// A run over a given pool (tests, or trajectories recorded elsewhere).
+    pub fn with_pool(config: PreferenceRunConfig, pool: QueryPool) -> Self {
+        let theta_true = random_unit_vector(pool.dim(), &mut stream(config.seed, THETA_STREAM));
+        let belief_seed = stream(config.seed, BELIEF_STREAM).random();
+        let mut belief = Belief::new(pool.dim(), config.belief, belief_seed);
+        // With no answer the posterior is the prior: sampling it gives row 0 of the curve.
+        belief.update();
+        let selector = Selector::new(
+            config.method,
+            config.acquisition,
+            &pool,
+            stream(config.seed, SELECTION_STREAM),
+        );
+        Self {
+            config,
+            pool,
+            selector,
+            belief,
+            theta_true,
+            queries: 0,
+        }
+    }
+
+    /// Ask one query and learn from the answer; `None` when the method has no new pair left.
+    pub fn step(&mut self, trainer: &mut dyn PreferenceTrainer) -> Option<QueryReport> {
+        let pair = self.selector.next(
+            &self.pool,
+            self.config.scene_graph.dim(),
+            self.queries,
+            &self.belief,
+        )?;
+        let preference = trainer.compare(&PreferenceQuery {
+            query: self.queries,
+            left: &pair.left,
+            right: &pair.right,
+            predicate: pair.predicate,
+        });
+        let response = match preference {
+            Preference::Left => Some(Response::First),
+            Preference::Right => Some(Response::Second),
+            Preference::Equal => Some(Response::Equal),
+            Preference::Skip => None,
+        };
+        let update_ms = response.map(|r| {
+            self.belief
+                .add_answer(&pair.left.features, &pair.right.features, r);
+            let start = Instant::now();
+            self.belief.update();
+            start.elapsed().as_secs_f64() * 1e3
+        });
+        self.queries += 1;
+        Some(QueryReport {
+            query: self.queries,
+            pair,
+            preference,
+            alignment: self.alignment(),
+            alignment_of_mean: self.alignment_of_mean(),
+            update_ms,
+        })
+    }
+
+    pub fn config(&self) -> &PreferenceRunConfig {
+        &self.config
+    }
+
+    pub fn pool(&self) -> &QueryPool {
+        &self.pool
+    }
+
+    pub fn belief(&self) -> &Belief {
+        &self.belief
+    }
+
+    pub fn theta_true(&self) -> &[f64] {
+        &self.theta_true
+    }
+
+    /// Queries asked so far.
+    pub fn queries(&self) -> usize {
+        self.queries
+    }
+
+    pub fn alignment(&self) -> f64 {
+        self.belief.alignment(&self.theta_true)
+    }
+
+    pub fn alignment_of_mean(&self) -> f64 {
+        self.belief.alignment_of_mean(&self.theta_true)
+    }
+}
+
+/// The run seed's generator on `stream`.
+fn stream(seed: u64, stream: u64) -> ChaCha8Rng {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(stream);
+    rng
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::guidance::drpl::pool::TrajectoryFeatures;
+    use crate::guidance::drpl::trainer::SyntheticOracle;
+    use crate::scene_graph::AbstractState;
+
+    /// Two trajectories over states 0, 1, 2, 3 with features that vary along them.
+    fn pool() -> QueryPool {
+        let traj = |g: &[u32], shift: f64| TrajectoryFeatures {
+            states: g.iter().map(|&b| AbstractState(b)).collect(),
+            phis: (0..g.len())
+                .map(|t| vec![t as f64 + shift, (t as f64 * 0.7).sin()])
+                .collect(),
+        };
+        let g = [0, 0, 0, 1, 1, 1, 3, 3, 3, 2, 2, 2];
+        QueryPool::new(
+            2,
+            vec![traj(&g, 0.0), traj(&g, 5.0), traj(&g[3..], -2.0)],
+            3,
+        )
+    }
+
+    #[test]
+    fn each_answer_is_a_query_and_theta_true_is_a_unit_vector_of_the_seed() {
+        let config = PreferenceRunConfig::new(Task::Reaching, QueryMethod::Drpl, 9);
+        let mut run = PreferenceRun::with_pool(config.clone(), pool());
+        let mut oracle = SyntheticOracle::new(run.theta_true().to_vec());
+        for q in 1..=5 {
+            let r = run.step(&mut oracle).expect("pairs left");
+            assert_eq!(r.query, q);
+            assert!(r.update_ms.is_some());
+            assert!((-1.0..=1.0).contains(&r.alignment));
+            // Only bits 0 and 1 ever differ, so predicates 2..5 fall through to the next i.
+            let i = r.pair.predicate.expect("drpl names its predicate");
+            assert!(i < 2, "predicate {i}");
+            let (gl, gr) = (r.pair.left.abstract_state, r.pair.right.abstract_state);
+            assert_ne!(gl.unwrap().bit(i), gr.unwrap().bit(i));
+        }
+        assert_eq!(run.queries(), 5);
+        let norm: f64 = run.theta_true().iter().map(|x| x * x).sum::<f64>().sqrt();
+        assert!((norm - 1.0).abs() < 1e-12);
+        let same = PreferenceRun::with_pool(config, pool());
+        assert_eq!(same.theta_true(), run.theta_true());
+        let other = PreferenceRun::with_pool(
+            PreferenceRunConfig::new(Task::Reaching, QueryMethod::Full, 10),
+            pool(),
+        );
+        assert_ne!(other.theta_true(), run.theta_true());
+    }
+
+    #[test]
+    fn settings_override_by_name_and_reject_nonsense() {
+        let mut c = PreferenceRunConfig::new(Task::LunarLander, QueryMethod::Drpl, 0);
+        c.set("trajectories", "12").unwrap();
+        c.set("min_run", "1").unwrap();
+        c.set("acquisition", "mutual-information").unwrap();
+        c.set("samples", "50").unwrap();
+        c.set("beta", "2.5").unwrap();
+        c.set("side_engines_on_a0", "true").unwrap();
+        assert_eq!((c.trajectories, c.min_run, c.belief.samples), (12, 1, 50));
+        assert_eq!(c.acquisition, Acquisition::MutualInformation);
+        assert_eq!(c.belief.beta, 2.5);
+        assert!(c.set("trajectories", "1").is_err());
+        assert!(c.set("beta", "nan").is_err());
+        assert!(c.set("thinning", "0").is_err());
+        assert!(
+            c.set("hidden", "3")
+                .unwrap_err()
+                .contains("unknown setting")
+        );
+        let mut r = PreferenceRunConfig::new(Task::Reaching, QueryMethod::Drpl, 0);
+        assert!(r.set("side_engines_on_a0", "true").is_err());
+    }
+
+    /// Skips count as queries but teach the belief nothing.
+    #[test]
+    fn skips_are_recorded_without_an_update() {
+        struct Skipper;
+        impl PreferenceTrainer for Skipper {
+            fn compare(&mut self, _q: &PreferenceQuery<'_>) -> Preference {
+                Preference::Skip
+            }
+        }
+        let config = PreferenceRunConfig::new(Task::Reaching, QueryMethod::DrplSs, 1);
+        let mut run = PreferenceRun::with_pool(config, pool());
+        let r = run.step(&mut Skipper).unwrap();
+        assert_eq!((r.preference, r.update_ms), (Preference::Skip, None));
+        assert_eq!(run.belief().answers(), 0);
+        assert_eq!(run.queries(), 1);
+    }
+}
