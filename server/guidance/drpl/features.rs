@@ -161,6 +161,9 @@ mod tests {
         assert!(close(side(0.5001), -0.5001));
         assert!(close(side(-0.75), -0.75));
         assert!(close(side(-1.0), -1.0));
+        // Out-of-range actions count at full throttle, as the env clips them.
+        assert!(close(side(1.5), -1.0));
+        assert!(close(main(2.0), -1.0));
     }
 
     #[test]

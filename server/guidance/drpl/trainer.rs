@@ -121,6 +121,11 @@ mod tests {
             ask(&mut o, vec![2.0, 5.0], vec![2.0, -5.0]),
             Preference::Right
         );
+        // No margin: the smallest true difference decides.
+        assert_eq!(
+            ask(&mut o, vec![2.0 + 1e-12, 0.0], vec![2.0, 0.0]),
+            Preference::Left
+        );
         for _ in 0..3 {
             assert_eq!(
                 ask(&mut o, vec![2.1, 0.0], vec![2.0, 0.0]),
