@@ -3,6 +3,7 @@
 mod bench;
 mod expert;
 mod overrides;
+mod prefs;
 mod progress;
 mod reproduce;
 mod sim;
@@ -27,6 +28,8 @@ pub enum Command {
     Sim(sim::SimArgs),
     /// Train SAC, EF-p% or DREF with the synthetic evaluative trainer; write metrics.csv and summary.json.
     Train(train::TrainArgs),
+    /// Learn a reward from preferences (DRPL or a baseline) with the synthetic oracle; write alignment.csv and summary.json.
+    Prefs(prefs::PrefsArgs),
     /// Train the SAC expert that the synthetic evaluative trainer consults.
     Expert(expert::ExpertArgs),
     /// Run the paper's Figure 3 or 5 grid as parallel processes; write table.md and figures.
@@ -39,6 +42,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Sim(args) => sim::run(args),
         Command::Train(args) => train::run(args),
+        Command::Prefs(args) => prefs::run(args),
         Command::Expert(args) => expert::run(args),
         Command::Reproduce(args) => reproduce::run(args),
         Command::Bench(args) => bench::run(args),
