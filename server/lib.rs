@@ -25,7 +25,8 @@
 //!
 //! - [`report`]: the paper's Figures 3 and 5: the run grid and its child processes, aggregation
 //!   over seeds, `table.md`, SVG and PNG figures (aggregation and tables are pure functions).
-//! - [`cli`]: the `dualrep` command line: `sim`, `train`, `expert`, `reproduce`, `bench`.
+//! - [`cli`]: the `dualrep` command line: `sim`, `train`, `prefs`, `expert`, `reproduce`,
+//!   `bench`.
 
 pub mod cli;
 pub mod guidance;

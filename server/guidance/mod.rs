@@ -6,7 +6,9 @@
 //! - `evaluative_trainer`: the `EvaluativeTrainer` trait (synthetic oracle or a person) and H.
 //! - `expert_oracle`: the synthetic trainer, a SAC expert's critic judging the learner's action.
 //! - `evaluative_run`: one SAC / EF-p% / DREF run, step by step, and policy evaluation.
-//! - `drpl`: DRPL's belief over the reward weights (APReL's sampling-based belief) and acquisition.
+//! - `drpl`: what to ask: DRPL's scene-graph segments and pairs, its baselines, the belief over
+//!   the reward weights (APReL's sampling-based belief), acquisition, the synthetic preference
+//!   oracle and the preference run.
 
 pub mod drpl;
 pub mod evaluative_run;
