@@ -54,6 +54,8 @@ pub struct Fig5Method {
     /// x is the query index.
     pub curve: Curve,
     pub final_alignment: MeanSe,
+    /// cos(posterior mean, theta_true) after the last query: APReL's `cosine_similarity`.
+    pub final_alignment_of_mean: MeanSe,
     pub segment_length: MeanSe,
 }
 
@@ -175,6 +177,10 @@ pub fn aggregate_fig5(runs: &[PrefsRun]) -> Vec<Fig5Task> {
                     }
                     let finals: Vec<f64> =
                         seeds.iter().map(|r| r.summary.final_alignment).collect();
+                    let finals_of_mean: Vec<f64> = seeds
+                        .iter()
+                        .filter_map(|r| r.alignment.last().map(|row| row.alignment_of_mean))
+                        .collect();
                     let lengths: Vec<f64> = seeds
                         .iter()
                         .filter_map(|r| r.summary.mean_segment_length)
@@ -183,6 +189,7 @@ pub fn aggregate_fig5(runs: &[PrefsRun]) -> Vec<Fig5Task> {
                         method,
                         curve,
                         final_alignment: mean_se(&finals),
+                        final_alignment_of_mean: mean_se(&finals_of_mean),
                         segment_length: mean_se(&lengths),
                     }
                 })
