@@ -8,8 +8,9 @@ use anyhow::Context;
 use clap::Args;
 use serde::Serialize;
 
+use super::output::{publish_summary, write_atomically};
 use super::overrides;
-use super::train::{NoTrainer, drive, final_performance, resolve_config, write_atomically};
+use super::train::{NoTrainer, drive, final_performance, resolve_config};
 use crate::guidance::evaluative_run::{EvaluativeRun, EvaluativeRunConfig, evaluate_policy};
 use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::sim::Task;
@@ -79,10 +80,5 @@ pub fn run(args: ExpertArgs) -> anyhow::Result<()> {
         wall_seconds: start.elapsed().as_secs_f64(),
         config,
     };
-    write_atomically(
-        &args.out.with_extension("json"),
-        &serde_json::to_vec_pretty(&note)?,
-    )?;
-    println!("{}", serde_json::to_string(&note)?);
-    Ok(())
+    publish_summary(&args.out.with_extension("json"), &note)
 }

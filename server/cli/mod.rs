@@ -2,6 +2,7 @@
 
 mod bench;
 mod expert;
+mod output;
 mod overrides;
 mod prefs;
 mod progress;

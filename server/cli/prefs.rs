@@ -12,9 +12,9 @@ use anyhow::Context;
 use clap::Args;
 use serde::Serialize;
 
+use super::output::publish_summary;
 use super::overrides;
 use super::progress::Progress;
-use super::train::write_atomically;
 use crate::guidance::drpl::acquisition::Acquisition;
 use crate::guidance::drpl::features;
 use crate::guidance::drpl::pool::Clip;
@@ -209,12 +209,7 @@ pub fn run(args: PrefsArgs) -> anyhow::Result<()> {
         wall_seconds: start.elapsed().as_secs_f64(),
         config,
     };
-    write_atomically(
-        &args.out.join("summary.json"),
-        &serde_json::to_vec_pretty(&summary)?,
-    )?;
-    println!("{}", serde_json::to_string(&summary)?);
-    Ok(())
+    publish_summary(&args.out.join("summary.json"), &summary)
 }
 
 /// Append one query to `alignment.csv` and `queries.jsonl`, flushed so a watcher sees it.

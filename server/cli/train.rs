@@ -11,6 +11,7 @@ use anyhow::Context;
 use clap::Args;
 use serde::Serialize;
 
+use super::output::publish_summary;
 use super::overrides;
 use super::progress::Progress;
 use crate::guidance::evaluative_run::{EpisodeRecord, EvaluativeRun, EvaluativeRunConfig};
@@ -115,14 +116,6 @@ pub fn load_expert(path: &Path, task: Task) -> anyhow::Result<Sac> {
     Sac::from_safetensors(&bytes).with_context(|| format!("loading the expert {}", path.display()))
 }
 
-/// Write `bytes` to `path` through a temporary file and a rename, so a reader never sees half.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    let tmp = path.with_extension("tmp");
-    fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
-    fs::rename(&tmp, path)
-        .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))
-}
-
 /// Run `run` to `steps`, appending finished episodes to `metrics.csv` in `out`.
 pub fn drive(
     run: &mut EvaluativeRun,
@@ -225,10 +218,5 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
         updates_per_second: run.learner().updates() as f64 / wall_seconds,
         config,
     };
-    write_atomically(
-        &args.out.join("summary.json"),
-        &serde_json::to_vec_pretty(&summary)?,
-    )?;
-    println!("{}", serde_json::to_string(&summary)?);
-    Ok(())
+    publish_summary(&args.out.join("summary.json"), &summary)
 }
