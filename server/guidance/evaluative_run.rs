@@ -5,7 +5,7 @@
 //! Per environment step t:
 //! 1. `a_t ~ pi(.|s_t)`; `H_hat = min_j H_j(s_t, a_t)` before this step's update.
 //! 2. Step the env: `s_{t+1}, r_t, terminated, truncated`.
-//! 3. `g` = the scene graph on `(s_{t+1}, a_t)` [authors].
+//! 3. `g` = the scene graph on `(s_{t+1}, a_t)` \[authors\].
 //! 4. Ask iff the method's schedule says so (DREF: the UCB rank test on g; EF: a coin of p).
 //! 5. If asked, H_t comes from the trainer and DREF's statistics learn `|H_t - H_hat|`.
 //! 6. Store `(s_t, a_t, r_t, H_t, s_{t+1}, terminated)` and do the learner's gradient step.

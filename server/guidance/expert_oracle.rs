@@ -5,7 +5,7 @@
 //! critics, and `H = +1 if alpha * Q*(s, a*) < Q*(s, a) else -1`, where alpha starts at 0.999 and
 //! grows by 1e-8 every environment step (queried or not), so the bar rises to the expert's own
 //! action over a 100k-step run. For negative Q the authors' bar `alpha * Q*` lies *above* Q*
-//! (stricter than intended); `SignAware` uses `Q* - (1 - alpha) |Q*|` instead [choice].
+//! (stricter than intended); `SignAware` uses `Q* - (1 - alpha) |Q*|` instead \[choice\].
 
 use serde::{Deserialize, Serialize};
 
@@ -23,7 +23,7 @@ pub enum OracleRule {
     SignAware,
 }
 
-/// alpha's value at the start of a run and its growth per environment step [authors].
+/// alpha's value at the start of a run and its growth per environment step \[authors\].
 pub const ALPHA_START: f64 = 0.999;
 pub const ALPHA_GROWTH_PER_STEP: f64 = 1e-8;
 

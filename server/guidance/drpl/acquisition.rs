@@ -9,10 +9,10 @@ use super::belief::{Belief, Response};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Acquisition {
-    /// Uniformly among the candidates [paper].
+    /// Uniformly among the candidates \[paper\].
     #[default]
     Uniform,
-    /// The candidate with the highest mutual information with the belief [aprel].
+    /// The candidate with the highest mutual information with the belief \[aprel\].
     MutualInformation,
 }
 

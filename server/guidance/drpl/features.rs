@@ -1,4 +1,4 @@
-//! The reward features phi(s_{t+1}, a_t) of each task (algorithms.md section 3, [choice]): the
+//! The reward features phi(s_{t+1}, a_t) of each task (algorithms.md section 3, \[choice\]): the
 //! synthetic oracle's true reward and the belief's reward model are both `theta . phi`.
 //!
 //! Every feature is oriented so that "more is better" under the task's own reward, which makes

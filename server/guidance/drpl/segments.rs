@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::scene_graph::AbstractState;
 
-/// Runs of g shorter than this many steps are merged into a neighbour [choice].
+/// Runs of g shorter than this many steps are merged into a neighbour \[choice\].
 pub const DEFAULT_MIN_RUN: usize = 3;
 
 /// One stretch `start..end` of a trajectory's steps, labelled with one abstract state.
@@ -47,7 +47,7 @@ pub fn runs(states: &[AbstractState]) -> Vec<(Range<usize>, AbstractState)> {
     out
 }
 
-/// Cut trajectory `trajectory` (its per-step abstract states) into segments [choice]:
+/// Cut trajectory `trajectory` (its per-step abstract states) into segments \[choice\]:
 ///
 /// - a run of at least `min_run` steps starts a new segment with its own state;
 /// - a shorter run is a flicker of the scene graph at a predicate's threshold (or an engine

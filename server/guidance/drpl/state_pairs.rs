@@ -85,7 +85,7 @@ pub struct Candidates {
 
 impl Candidates {
     /// DRPL's candidates for query `query_index` (0-based) over a graph of `dim` predicates:
-    /// i = query_index mod dim; pairs with g[i] != g'[i] at Hamming distance 1, else at the least
+    /// i = query_index mod dim; pairs with g\[i\] != g'\[i\] at Hamming distance 1, else at the least
     /// distance there is; if no pair differs in i (or all were asked), the next i. `None` when no
     /// unasked pair differs in any predicate.
     pub fn drpl(

@@ -1,5 +1,5 @@
 //! The recorded trajectories DRPL and its baselines draw queries from (algorithms.md section 3,
-//! step 1 [choice]): a random policy from the env's own randomised resets, as the paper records
+//! step 1 \[choice\]): a random policy from the env's own randomised resets, as the paper records
 //! "agents starting at random positions and taking random actions".
 
 use rand::{Rng, SeedableRng};

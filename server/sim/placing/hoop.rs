@@ -29,7 +29,7 @@ pub(crate) const NO_ENTRY: Region<3> = Region {
 };
 /// Gripper travel per step at full action [our choice].
 pub const STEP_SIZE: f32 = 0.02;
-/// How far along the action the gate probes [authors]; larger than the move itself.
+/// How far along the action the gate probes \[authors\]; larger than the move itself.
 pub const LOOKAHEAD: f32 = 0.07;
 /// The gripper starts above this height (the reset's random moves may take it lower).
 pub const START_MIN_Z: f32 = 1.05;

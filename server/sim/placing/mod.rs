@@ -3,7 +3,7 @@
 //! - obs = gripper (x, y, z, g), g = +1 closed, -1 open (the last gripper command).
 //! - action in `[-1, 1]^4`: (dx, dy, dz) moves up to 2 cm per 50 ms step, the fourth entry
 //!   opens the gripper when negative.
-//! - Safety gate [authors]: the xyz move is zeroed if `gripper + 0.07 * a_xyz` leaves the
+//! - Safety gate \[authors\]: the xyz move is zeroed if `gripper + 0.07 * a_xyz` leaves the
 //!   workspace or enters the no-entry box under and beside the hoop (see `hoop`).
 //! - Reset: a uniform start above z = 1.05, then 50 random moves with the gripper closed that
 //!   count toward the 1000-step horizon. A reset whose random moves touch the hoop is redrawn
