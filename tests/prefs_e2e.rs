@@ -1,31 +1,23 @@
 //! `dualrep prefs` end to end on a tiny budget: the files `reproduce fig5` reads (through the
 //! report's own reader and the grid's own command line), the per-query log, determinism, and
-//! clear errors on bad input. The belief may still be a stand-in here, so these tests check the
-//! structure of a run, not how well it learns.
+//! clear errors on bad input. These tests check the structure of a run; how well it learns is
+//! Figure 5's (docs/results/fig5).
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
 use dualrep::report::grid::{Figure, GridConfig};
 use dualrep::report::run_files::{RunKey, load_prefs_runs, read_prefs_run};
 use dualrep::scene_graph::SceneGraph;
 use dualrep::sim::Task;
 
-fn dualrep(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dualrep"))
-        .args(args)
-        .output()
-        .expect("binary runs")
-}
+#[path = "support/cli.rs"]
+mod cli;
 
-fn ok(out: &Output) -> serde_json::Value {
-    assert!(
-        out.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    serde_json::from_str(stdout.lines().last().expect("a summary line")).unwrap()
+use cli::ok;
+
+fn dualrep(args: &[&str]) -> Output {
+    cli::dualrep_in(args, None)
 }
 
 fn prefs(task: &str, method: &str, queries: u32, seed: u64, out: &Path) -> serde_json::Value {

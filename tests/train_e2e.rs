@@ -2,29 +2,15 @@
 //! the files `reproduce` reads, the feedback accounting, and clear errors on bad input.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
+
+#[path = "support/cli.rs"]
+mod cli;
+
+use cli::ok;
 
 fn dualrep(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dualrep"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("binary runs")
-}
-
-fn ok(out: &Output) -> serde_json::Value {
-    assert!(
-        out.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(
-        out.stdout
-            .rsplit(|&b| b == b'\n')
-            .find(|l| !l.is_empty())
-            .unwrap(),
-    )
-    .unwrap()
+    cli::dualrep_in(args, Some(dir))
 }
 
 const TINY: [&str; 4] = ["--set", "hidden=16,16", "--set", "batch_size=32"];
