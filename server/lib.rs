@@ -20,17 +20,32 @@
 //! - [`guidance`]: when to ask (DREF's UCB query rule, EF-p%), who answers (the
 //!   `EvaluativeTrainer` trait, the expert oracle), the evaluative training loop; later, what
 //!   to ask (DRPL).
+//! - [`session`]: one training session as a plain loop on its own thread, talking to the
+//!   server only through channels; pacing, queries to people, replay of stored answers on
+//!   resume, checkpoints. No async runtime, no database.
 //!
-//! The edge (files and processes):
+//! The edge (files, processes, network, database):
 //!
+//! - [`store`]: SQLite through sqlx (schema in `migrations/`): sessions, queries, answers,
+//!   episodes, checkpoints.
+//! - [`hub`]: the sessions a server runs: a cap on how many at once, one thread each, an async
+//!   consumer of each session's events, the answer path (commit, then acknowledge), stop, resume
+//!   and graceful shutdown.
+//! - [`http`]: REST routes, auth, errors, the web UI's files; [`ws`]: the trainer websocket and
+//!   its typed protocol.
 //! - [`report`]: the paper's Figures 3 and 5: the run grid and its child processes, aggregation
 //!   over seeds, `table.md`, SVG and PNG figures (aggregation and tables are pure functions).
-//! - [`cli`]: the `dualrep` command line: `sim`, `train`, `prefs`, `expert`, `reproduce`,
-//!   `bench`.
+//! - [`cli`]: the `dualrep` command line: `serve`, `sim`, `train`, `prefs`, `expert`,
+//!   `reproduce`, `bench`, `loadtest`.
 
 pub mod cli;
 pub mod guidance;
+pub mod http;
+pub mod hub;
 pub mod report;
 pub mod rl;
 pub mod scene_graph;
+pub mod session;
 pub mod sim;
+pub mod store;
+pub mod ws;

@@ -2,11 +2,13 @@
 
 mod bench;
 mod expert;
+mod loadtest;
 mod output;
 mod overrides;
 mod prefs;
 mod progress;
 mod reproduce;
+pub mod serve;
 mod sim;
 mod train;
 
@@ -25,6 +27,8 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Serve the web UI, the REST API and the trainer websockets; run training sessions.
+    Serve(serve::ServeArgs),
     /// Run a random or heuristic policy on a task and print a JSON summary.
     Sim(sim::SimArgs),
     /// Train SAC, EF-p% or DREF with the synthetic evaluative trainer; write metrics.csv and summary.json.
@@ -35,17 +39,21 @@ pub enum Command {
     Expert(expert::ExpertArgs),
     /// Run the paper's Figure 3 or 5 grid as parallel processes; write table.md and figures.
     Reproduce(reproduce::ReproduceArgs),
+    /// Real websocket trainers against a server: answers per second, ack latency, lost answers.
+    Loadtest(loadtest::LoadtestArgs),
     /// Time the learner: `bench sac` (updates per second against the sgemm peak), `bench belief`.
     Bench(bench::BenchArgs),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
+        Command::Serve(args) => serve::run(args),
         Command::Sim(args) => sim::run(args),
         Command::Train(args) => train::run(args),
         Command::Prefs(args) => prefs::run(args),
         Command::Expert(args) => expert::run(args),
         Command::Reproduce(args) => reproduce::run(args),
         Command::Bench(args) => bench::run(args),
+        Command::Loadtest(args) => loadtest::run(args),
     }
 }

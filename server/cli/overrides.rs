@@ -7,8 +7,6 @@ use anyhow::{Context, bail};
 use clap::Args;
 
 use crate::guidance::evaluative_run::EvaluativeRunConfig;
-use crate::guidance::query_rule::UcbForm;
-use crate::scene_graph::SceneGraph;
 
 /// The override flags `train` and `expert` share.
 #[derive(Debug, Args)]
@@ -59,35 +57,17 @@ pub fn read_toml(path: &Path) -> anyhow::Result<Vec<(String, String)>> {
         .collect()
 }
 
-/// Apply one override: the query rule's and scene graph's keys here, every other key to SAC.
+/// Apply one override (see `EvaluativeRunConfig::set`).
 pub fn apply(config: &mut EvaluativeRunConfig, key: &str, value: &str) -> Result<(), String> {
-    let bad = |what: &str| format!("{key}={value}: expected {what}");
-    match key {
-        "c" => config.query_rule.c = value.parse().map_err(|_| bad("a number"))?,
-        "k" => config.query_rule.k = value.parse().map_err(|_| bad("a non-negative integer"))?,
-        "ucb" => {
-            config.query_rule.form = match value {
-                "authors" => UcbForm::Authors,
-                "paper" => UcbForm::Paper,
-                _ => return Err(bad("authors or paper")),
-            }
-        }
-        "side_engines_on_a0" => {
-            let on: bool = value.parse().map_err(|_| bad("true or false"))?;
-            match &mut config.scene_graph {
-                SceneGraph::LunarLander { side_engines_on_a0 } => *side_engines_on_a0 = on,
-                _ => return Err(format!("{key} applies to lunar-lander only")),
-            }
-        }
-        _ => config.sac.set(key, value)?,
-    }
-    Ok(())
+    config.set(key, value)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::guidance::feedback_schedule::EvaluativeMethod;
+    use crate::guidance::query_rule::UcbForm;
+    use crate::scene_graph::SceneGraph;
     use crate::sim::Task;
 
     #[test]

@@ -74,6 +74,31 @@ impl EvaluativeRunConfig {
             scene_graph: SceneGraph::for_task(task),
         }
     }
+
+    /// Override one hyper-parameter by name (`--set`, TOML files, the server's `params`): the query rule's and scene graph's keys here, every other key to SAC.
+    pub fn set(&mut self, key: &str, value: &str) -> Result<(), String> {
+        let bad = |what: &str| format!("{key}={value}: expected {what}");
+        match key {
+            "c" => self.query_rule.c = value.parse().map_err(|_| bad("a number"))?,
+            "k" => self.query_rule.k = value.parse().map_err(|_| bad("a non-negative integer"))?,
+            "ucb" => {
+                self.query_rule.form = match value {
+                    "authors" => UcbForm::Authors,
+                    "paper" => UcbForm::Paper,
+                    _ => return Err(bad("authors or paper")),
+                }
+            }
+            "side_engines_on_a0" => {
+                let on: bool = value.parse().map_err(|_| bad("true or false"))?;
+                match &mut self.scene_graph {
+                    SceneGraph::LunarLander { side_engines_on_a0 } => *side_engines_on_a0 = on,
+                    _ => return Err(format!("{key} applies to lunar-lander only")),
+                }
+            }
+            _ => self.sac.set(key, value)?,
+        }
+        Ok(())
+    }
 }
 
 /// One finished episode, as a row of `metrics.csv`.

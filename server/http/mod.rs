@@ -1,0 +1,124 @@
+//! The HTTP edge: REST routes under `/api`, the trainer websocket under `/ws`, the web UI's
+//! files, `/healthz`. Researcher routes sit behind the bearer token; bodies are capped; CORS is
+//! closed unless origins are configured.
+//!
+//! - `sessions`: launch, list, inspect, stop, resume, episodes, answers, export.
+//! - `tasks`, `openapi`: self-description.
+//! - `auth`, `error`: the bearer check and the JSON error shape.
+
+pub mod auth;
+pub mod error;
+pub mod openapi;
+pub mod sessions;
+pub mod tasks;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use axum::extract::{Path, State};
+use axum::http::{HeaderValue, Method, StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use axum::routing::{any, get, post};
+use axum::{Json, Router, middleware};
+use tower_http::cors::CorsLayer;
+use tower_http::limit::RequestBodyLimitLayer;
+use tower_http::services::{ServeDir, ServeFile};
+use tower_http::trace::TraceLayer;
+
+use crate::hub::Hub;
+use crate::store::Store;
+use error::{ApiError, ApiResult};
+
+/// Largest request body the API takes (launch requests are a few hundred bytes).
+pub const MAX_BODY_BYTES: usize = 64 * 1024;
+
+/// What every handler can reach.
+#[derive(Clone)]
+pub struct AppState {
+    pub store: Store,
+    pub hub: Arc<Hub>,
+    /// The researcher token.
+    pub token: Arc<str>,
+    pub web_dir: PathBuf,
+    pub data_dir: PathBuf,
+    /// Origins allowed to call the API from other sites (none by default).
+    pub cors_origins: Vec<HeaderValue>,
+}
+
+pub fn app(state: AppState) -> Router {
+    let researcher = Router::new()
+        .route("/api/sessions", post(sessions::create).get(sessions::list))
+        .route("/api/sessions/{id}", get(sessions::get))
+        .route("/api/sessions/{id}/stop", post(sessions::stop))
+        .route("/api/sessions/{id}/resume", post(sessions::resume))
+        .route("/api/sessions/{id}/episodes", get(sessions::episodes))
+        .route("/api/sessions/{id}/answers", get(sessions::answers))
+        .route("/api/sessions/{id}/export", get(sessions::export))
+        .route("/api/sessions/{id}/recording.rrd", get(recording))
+        .route_layer(middleware::from_fn_with_state(
+            state.clone(),
+            auth::require_researcher,
+        ));
+    let web = state.web_dir.clone();
+    let mut router = Router::new()
+        .merge(researcher)
+        .route("/api/tasks", get(tasks::tasks))
+        .route("/api/openapi.json", get(openapi::openapi))
+        .route("/api/{*rest}", any(api_not_found))
+        .route("/healthz", get(healthz))
+        .route("/ws/sessions/{id}", get(crate::ws::socket::upgrade))
+        .route_service("/train/{id}", ServeFile::new(web.join("train.html")))
+        .route_service("/review/{id}", ServeFile::new(web.join("review.html")))
+        .fallback_service(ServeDir::new(&web))
+        .layer(RequestBodyLimitLayer::new(MAX_BODY_BYTES))
+        .layer(TraceLayer::new_for_http());
+    if !state.cors_origins.is_empty() {
+        router = router.layer(
+            CorsLayer::new()
+                .allow_origin(state.cors_origins.clone())
+                .allow_methods([Method::GET, Method::POST])
+                .allow_headers([header::AUTHORIZATION, header::CONTENT_TYPE]),
+        );
+    }
+    router.with_state(state)
+}
+
+async fn api_not_found() -> ApiError {
+    ApiError::not_found("no such API route; see /api/openapi.json")
+}
+
+async fn healthz(State(state): State<AppState>) -> Response {
+    match state.store.ping().await {
+        Ok(()) => Json(serde_json::json!({"status": "ok"})).into_response(),
+        Err(e) => ApiError::new(
+            StatusCode::SERVICE_UNAVAILABLE,
+            "unhealthy",
+            format!("the database does not answer: {e}"),
+        )
+        .into_response(),
+    }
+}
+
+/// `<data dir>/recordings/<id>.rrd`, written by the session's recorder.
+async fn recording(State(state): State<AppState>, Path(id): Path<String>) -> ApiResult<Response> {
+    if state.store.session(&id).await?.is_none() {
+        return Err(ApiError::not_found(format!("no session {id}")));
+    }
+    let path = state.data_dir.join("recordings").join(format!("{id}.rrd"));
+    let bytes = tokio::fs::read(&path).await.map_err(|_| {
+        ApiError::not_found(format!(
+            "session {id} has no recording (recording was off, or it has not started)"
+        ))
+    })?;
+    Ok((
+        [
+            (header::CONTENT_TYPE, "application/octet-stream".to_string()),
+            (
+                header::CONTENT_DISPOSITION,
+                format!("attachment; filename=\"{id}.rrd\""),
+            ),
+        ],
+        bytes,
+    )
+        .into_response())
+}

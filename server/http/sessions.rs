@@ -1,0 +1,330 @@
+//! `/api/sessions`: launch, list, inspect, stop, resume; episodes, answers, export.
+
+use std::collections::BTreeMap;
+
+use axum::Json;
+use axum::extract::rejection::JsonRejection;
+use axum::extract::{Path, Query, State};
+use axum::http::{StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use serde::{Deserialize, Serialize};
+
+use super::AppState;
+use super::error::{ApiError, ApiResult};
+use crate::session::spec::DEFAULT_QUERIES;
+use crate::session::{SessionMethod, SessionSpec, TrainerKind};
+use crate::sim::Task;
+use crate::store::{AnswerCounts, SessionRow, Status};
+
+/// `POST /api/sessions`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LaunchRequest {
+    pub task: Task,
+    pub method: SessionMethod,
+    pub trainer: TrainerKind,
+    #[serde(default)]
+    pub seed: u64,
+    /// Environment steps (evaluative methods) [default: the paper's for the task].
+    pub steps: Option<u64>,
+    /// Queries (preference methods) [default: 40].
+    pub queries: Option<u64>,
+    #[serde(default)]
+    pub params: BTreeMap<String, serde_json::Value>,
+}
+
+impl LaunchRequest {
+    pub fn into_spec(self) -> Result<SessionSpec, String> {
+        let budget = if self.method.is_preference() {
+            if self.steps.is_some() {
+                return Err(format!(
+                    "{} asks queries: give `queries`, not `steps`",
+                    self.method
+                ));
+            }
+            self.queries.unwrap_or(DEFAULT_QUERIES as u64)
+        } else {
+            if self.queries.is_some() {
+                return Err(format!(
+                    "{} takes environment steps: give `steps`, not `queries`",
+                    self.method
+                ));
+            }
+            self.steps.unwrap_or(match self.task {
+                Task::LunarLander => 150_000,
+                Task::Reaching | Task::Placing => 100_000,
+            })
+        };
+        Ok(SessionSpec {
+            task: self.task,
+            method: self.method,
+            trainer: self.trainer,
+            seed: self.seed,
+            budget,
+            params: self.params,
+        })
+    }
+}
+
+/// A session as the API shows it.
+#[derive(Debug, Serialize)]
+pub struct SessionView {
+    pub id: String,
+    pub task: String,
+    pub method: String,
+    pub trainer: String,
+    pub seed: i64,
+    pub budget: i64,
+    /// `steps` or `queries`.
+    pub unit: &'static str,
+    pub status: Status,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+    pub progress: i64,
+    pub params: serde_json::Value,
+    pub answers: AnswerCounts,
+    /// The latest metrics: answered, feedback fraction, recent returns, alignment.
+    pub latest: serde_json::Value,
+    pub trainer_url: String,
+    pub created_at: String,
+    pub started_at: Option<String>,
+    pub ended_at: Option<String>,
+    /// The trainer's total time in seconds: first query asked to last answer (the paper's T).
+    pub trainer_seconds: Option<f64>,
+}
+
+pub fn trainer_url(row: &SessionRow) -> String {
+    format!("/train/{}?token={}", row.id, row.trainer_token)
+}
+
+async fn view(state: &AppState, row: SessionRow) -> ApiResult<SessionView> {
+    let status = state.hub.status_of(&row);
+    let live = state.hub.live(&row.id);
+    let (progress, latest) = match &live {
+        Some(l) if status.is_active() => {
+            let p = l.lock().progress.clone();
+            (
+                p.progress as i64,
+                serde_json::to_value(p).unwrap_or_default(),
+            )
+        }
+        _ => (row.progress, row.latest.clone()),
+    };
+    let answers = state.store.answer_counts(&row.id).await?;
+    let trainer_seconds = state.store.trainer_seconds(&row.id).await?;
+    Ok(SessionView {
+        unit: if row
+            .config
+            .get("method")
+            .and_then(|m| m.as_str())
+            .and_then(|m| m.parse::<SessionMethod>().ok())
+            .is_some_and(|m| m.is_preference())
+        {
+            "queries"
+        } else {
+            "steps"
+        },
+        trainer_url: trainer_url(&row),
+        params: row.config.get("params").cloned().unwrap_or_default(),
+        id: row.id,
+        task: row.task,
+        method: row.method,
+        trainer: row.trainer,
+        seed: row.seed,
+        budget: row.budget,
+        status,
+        reason: if status.is_active() { None } else { row.reason },
+        progress,
+        answers,
+        latest,
+        created_at: row.created_at,
+        started_at: row.started_at,
+        ended_at: row.ended_at,
+        trainer_seconds,
+    })
+}
+
+async fn row(state: &AppState, id: &str) -> ApiResult<SessionRow> {
+    state
+        .store
+        .session(id)
+        .await?
+        .ok_or_else(|| ApiError::not_found(format!("no session {id}")))
+}
+
+pub async fn create(
+    State(state): State<AppState>,
+    body: Result<Json<LaunchRequest>, JsonRejection>,
+) -> ApiResult<(StatusCode, Json<serde_json::Value>)> {
+    let Json(request) = body.map_err(|e| match e.status() {
+        StatusCode::PAYLOAD_TOO_LARGE => ApiError::new(
+            StatusCode::PAYLOAD_TOO_LARGE,
+            "payload_too_large",
+            format!(
+                "request bodies are limited to {} bytes",
+                super::MAX_BODY_BYTES
+            ),
+        ),
+        _ => ApiError::bad_request(e.body_text()),
+    })?;
+    let spec = request.into_spec().map_err(ApiError::bad_request)?;
+    let row = state.hub.launch(spec).await?;
+    let status = state.hub.status_of(&row);
+    Ok((
+        StatusCode::CREATED,
+        Json(serde_json::json!({"id": row.id, "status": status, "trainer_url": trainer_url(&row)})),
+    ))
+}
+
+pub async fn list(State(state): State<AppState>) -> ApiResult<Json<Vec<SessionView>>> {
+    let mut out = Vec::new();
+    for r in state.store.sessions().await? {
+        out.push(view(&state, r).await?);
+    }
+    Ok(Json(out))
+}
+
+pub async fn get(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+) -> ApiResult<Json<SessionView>> {
+    let r = row(&state, &id).await?;
+    Ok(Json(view(&state, r).await?))
+}
+
+pub async fn stop(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+) -> ApiResult<Json<SessionView>> {
+    state.hub.stop(&id).await?;
+    let r = row(&state, &id).await?;
+    Ok(Json(view(&state, r).await?))
+}
+
+pub async fn resume(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+) -> ApiResult<Json<SessionView>> {
+    let r = state.hub.resume(&id).await?;
+    Ok(Json(view(&state, r).await?))
+}
+
+pub async fn episodes(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+) -> ApiResult<Response> {
+    row(&state, &id).await?;
+    Ok(Json(state.store.episodes(&id).await?).into_response())
+}
+
+pub async fn answers(State(state): State<AppState>, Path(id): Path<String>) -> ApiResult<Response> {
+    row(&state, &id).await?;
+    Ok(Json(state.store.answers(&id).await?).into_response())
+}
+
+#[derive(Debug, Deserialize)]
+pub struct ExportQuery {
+    pub format: Option<String>,
+}
+
+/// `GET .../export?format=jsonl|csv`: JSONL holds the session, then every answer and episode,
+/// one record per line (`"record"` names it); CSV holds the answers.
+pub async fn export(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+    Query(q): Query<ExportQuery>,
+) -> ApiResult<Response> {
+    let r = row(&state, &id).await?;
+    let answers = state.store.answers(&id).await?;
+    let format = q.format.as_deref().unwrap_or("jsonl");
+    let (body, content_type, ext) = match format {
+        "jsonl" => {
+            let mut out = String::new();
+            let session = view(&state, r).await?;
+            let mut line = |record: &str, value: serde_json::Value| {
+                let mut v = value;
+                v["record"] = record.into();
+                out.push_str(&v.to_string());
+                out.push('\n');
+            };
+            line(
+                "session",
+                serde_json::to_value(&session).unwrap_or_default(),
+            );
+            for a in &answers {
+                line("answer", serde_json::to_value(a).unwrap_or_default());
+            }
+            for e in state.store.episodes(&id).await? {
+                line("episode", serde_json::to_value(&e).unwrap_or_default());
+            }
+            (out, "application/x-ndjson", "jsonl")
+        }
+        "csv" => {
+            let mut w = csv::Writer::from_writer(Vec::new());
+            let io = |e: csv::Error| {
+                ApiError::new(
+                    StatusCode::INTERNAL_SERVER_ERROR,
+                    "export_failed",
+                    e.to_string(),
+                )
+            };
+            w.write_record([
+                "query_id",
+                "seq",
+                "kind",
+                "step",
+                "abstract_state",
+                "value",
+                "who",
+                "asked_at",
+                "answered_at",
+                "latency_ms",
+            ])
+            .map_err(io)?;
+            for a in &answers {
+                let value = serde_json::to_string(&a.value).unwrap_or_default();
+                w.write_record([
+                    a.query_id.to_string(),
+                    a.seq.to_string(),
+                    a.kind.clone(),
+                    a.step.to_string(),
+                    a.abstract_state.to_string(),
+                    value.trim_matches('"').to_string(),
+                    a.who.clone(),
+                    a.asked_at.clone(),
+                    a.answered_at.clone(),
+                    a.latency_ms.to_string(),
+                ])
+                .map_err(io)?;
+            }
+            let bytes = w.into_inner().map_err(|e| {
+                ApiError::new(
+                    StatusCode::INTERNAL_SERVER_ERROR,
+                    "export_failed",
+                    e.to_string(),
+                )
+            })?;
+            (
+                String::from_utf8_lossy(&bytes).into_owned(),
+                "text/csv",
+                "csv",
+            )
+        }
+        other => {
+            return Err(ApiError::bad_request(format!(
+                "format {other:?}: expected jsonl or csv"
+            )));
+        }
+    };
+    Ok((
+        [
+            (header::CONTENT_TYPE, content_type.to_string()),
+            (
+                header::CONTENT_DISPOSITION,
+                format!("attachment; filename=\"dualrep-{id}.{ext}\""),
+            ),
+        ],
+        body,
+    )
+        .into_response())
+}

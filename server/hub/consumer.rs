@@ -1,0 +1,214 @@
+//! Applies one session's events: stores queries, synthetic answers, episodes and checkpoints;
+//! keeps the live state that browsers join from; broadcasts frames and progress; starts each
+//! query's answer timeout.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use tokio::sync::mpsc::UnboundedReceiver;
+
+use super::Hub;
+use super::live::{Live, Pending};
+use crate::session::{AnswerValue, Ending, SessionEvent};
+use crate::store::{Status, SyntheticAnswer};
+use crate::ws::protocol::{QueryMessage, ServerMessage};
+
+/// Synthetic answers stored per transaction at most.
+const BATCH: usize = 512;
+/// How often progress reaches the database (the live state has it at once).
+const PROGRESS_TO_STORE_EVERY: Duration = Duration::from_secs(1);
+
+pub(super) async fn consume(
+    hub: Arc<Hub>,
+    live: Arc<Live>,
+    mut rx: UnboundedReceiver<SessionEvent>,
+) {
+    let store = hub.store.clone();
+    let id = live.id.clone();
+    let mut batch: Vec<SyntheticAnswer> = Vec::new();
+    let mut stored_progress_at = Instant::now();
+    let mut ending = Ending::Failed("the session thread ended without a word".into());
+    while let Some(event) = rx.recv().await {
+        let result: Result<(), sqlx::Error> = async {
+            match event {
+                SessionEvent::Started { replayed } => {
+                    live.lock().status = Status::Running;
+                    live.lock().progress.answered = replayed;
+                    store.set_status(&id, Status::Running, None).await?;
+                }
+                SessionEvent::Frame(frame) => {
+                    if let Some(g) = &frame.geometry {
+                        live.lock().geometry = Some(g.clone());
+                    }
+                    live.broadcast_message(&ServerMessage::Frame(*frame));
+                }
+                SessionEvent::Query {
+                    seq,
+                    step,
+                    abstract_state,
+                    content,
+                } => {
+                    let payload =
+                        serde_json::to_string(&content).expect("query content serialises");
+                    let query_id = store
+                        .upsert_query(&id, seq, live.kind, step, abstract_state, &payload)
+                        .await?;
+                    let timeout = live.answer_timeout;
+                    let text: Arc<str> = ServerMessage::Query(QueryMessage {
+                        id: query_id,
+                        seq,
+                        step,
+                        abstract_state,
+                        expires_in_ms: timeout.as_millis() as u64,
+                        content: *content,
+                    })
+                    .to_text()
+                    .into();
+                    let now = Instant::now();
+                    {
+                        let mut s = live.lock();
+                        s.pending = Some(Pending {
+                            id: query_id,
+                            seq,
+                            kind: live.kind,
+                            text: text.clone(),
+                            asked: now,
+                            deadline: now + timeout,
+                        });
+                        s.status = Status::Waiting;
+                    }
+                    live.broadcast(text);
+                    spawn_timeout(hub.clone(), live.clone(), query_id, timeout);
+                }
+                SessionEvent::Answered {
+                    seq,
+                    step,
+                    abstract_state,
+                    kind,
+                    value,
+                } => {
+                    batch.push(SyntheticAnswer {
+                        seq,
+                        kind,
+                        step,
+                        abstract_state,
+                        value,
+                    });
+                    live.lock().progress.answered += 1;
+                }
+                SessionEvent::Episode(e) => {
+                    store.insert_episode(&id, &e).await?;
+                    live.push_return(e.episode_return);
+                    live.lock().progress.feedback_fraction = e.feedback_fraction;
+                    live.broadcast_message(&live.progress_message());
+                }
+                SessionEvent::Alignment { alignment, .. } => {
+                    live.lock().progress.alignment = Some(alignment);
+                }
+                SessionEvent::Progress { progress } => {
+                    live.lock().progress.progress = progress;
+                    live.broadcast_message(&live.progress_message());
+                    if stored_progress_at.elapsed() >= PROGRESS_TO_STORE_EVERY {
+                        stored_progress_at = Instant::now();
+                        let latest =
+                            serde_json::to_value(&live.lock().progress).unwrap_or_default();
+                        store.set_progress(&id, progress, &latest).await?;
+                    }
+                }
+                SessionEvent::Checkpoint(c) => {
+                    // Answers the checkpoint relies on must be stored before it is.
+                    flush(&hub, &id, &mut batch).await?;
+                    let file = match &c.weights {
+                        Some(bytes) => Some(hub.write_checkpoint(&id, bytes.clone()).await),
+                        None => None,
+                    };
+                    let file = file.transpose().unwrap_or_else(|e| {
+                        tracing::error!(session = %id, "writing a checkpoint: {e}");
+                        None
+                    });
+                    store
+                        .insert_checkpoint(&id, c.progress, c.answers, &c.digest, file.as_deref())
+                        .await?;
+                }
+                SessionEvent::Ended(e) => ending = e,
+            }
+            if batch.len() >= BATCH || (rx.is_empty() && !batch.is_empty()) {
+                flush(&hub, &id, &mut batch).await?;
+            }
+            Ok(())
+        }
+        .await;
+        if let Err(e) = result {
+            tracing::error!(session = %id, "storing a session event failed: {e}");
+        }
+    }
+    if let Err(e) = flush(&hub, &id, &mut batch).await {
+        tracing::error!(session = %id, "storing synthetic answers failed: {e}");
+    }
+    finish(&hub, &live, ending).await;
+}
+
+async fn flush(hub: &Hub, id: &str, batch: &mut Vec<SyntheticAnswer>) -> Result<(), sqlx::Error> {
+    if batch.is_empty() {
+        return Ok(());
+    }
+    hub.store.insert_synthetic(id, batch).await?;
+    batch.clear();
+    Ok(())
+}
+
+/// The session thread is done: store the final state and tell the browsers.
+async fn finish(hub: &Hub, live: &Arc<Live>, ending: Ending) {
+    let (status, reason) = match ending {
+        Ending::Finished => (Status::Finished, None),
+        Ending::Stopped => (Status::Stopped, None),
+        Ending::Interrupted => (
+            Status::Interrupted,
+            Some("the server shut down".to_string()),
+        ),
+        Ending::Failed(r) => (Status::Failed, Some(r)),
+    };
+    let pending = {
+        let mut s = live.lock();
+        s.status = status;
+        s.reason = reason.clone();
+        s.control = None;
+        s.pending.take()
+    };
+    let latest = serde_json::to_value(&live.lock().progress).unwrap_or_default();
+    let progress = live.lock().progress.progress;
+    if let Err(e) = hub.store.set_progress(&live.id, progress, &latest).await {
+        tracing::error!(session = %live.id, "storing progress: {e}");
+    }
+    if let Err(e) = hub
+        .store
+        .set_status(&live.id, status, reason.as_deref())
+        .await
+    {
+        tracing::error!(session = %live.id, "storing the final status: {e}");
+    }
+    if let Some(p) = pending {
+        live.broadcast_message(&ServerMessage::Withdrawn {
+            id: p.id,
+            reason: "ended",
+        });
+    }
+    live.broadcast_message(&live.progress_message());
+    live.broadcast_message(&ServerMessage::Ended { status, reason });
+    // From here the store has the final state; connected sockets keep their `Arc` until they go.
+    hub.forget(live);
+    tracing::info!(session = %live.id, status = status.as_str(), "session ended");
+}
+
+/// After `timeout` an open query counts as "no feedback" (a skipped pair), committed like any
+/// answer so that exactly one answer is ever stored.
+fn spawn_timeout(hub: Arc<Hub>, live: Arc<Live>, query_id: i64, timeout: Duration) {
+    tokio::spawn(async move {
+        tokio::time::sleep(timeout).await;
+        let still_open = live.lock().pending.as_ref().map(|p| p.id) == Some(query_id);
+        if still_open {
+            let value = AnswerValue::timeout(live.kind);
+            let _ = live.answer(&hub.store, query_id, value, "timeout").await;
+        }
+    });
+}

@@ -1,0 +1,287 @@
+//! One running (or recently ended) session as the async side sees it: the pending query, the
+//! broadcast to watching browsers, and the answer path. An answer is forwarded to the session
+//! thread and acknowledged only after the store committed it; the first committed answer wins.
+
+use std::sync::mpsc::Sender;
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use tokio::sync::broadcast;
+
+use crate::session::{AnswerValue, Control, SessionSpec};
+use crate::sim::Geometry;
+use crate::store::{CommitOutcome, Status, Store};
+use crate::ws::protocol::{ProgressMessage, ProtocolError, ServerMessage};
+
+/// Messages kept for a browser that falls behind before it must catch up from `hello`.
+const BROADCAST_CAPACITY: usize = 256;
+/// Returns kept for the trainer's live curve.
+const RECENT_RETURNS: usize = 50;
+
+/// The query a session waits on.
+#[derive(Clone, Debug)]
+pub struct Pending {
+    pub id: i64,
+    pub seq: u64,
+    pub kind: &'static str,
+    /// The query message, serialised once for every browser.
+    pub text: Arc<str>,
+    pub asked: Instant,
+    pub deadline: Instant,
+}
+
+/// What browsers need to (re)join.
+#[derive(Debug)]
+pub struct LiveState {
+    pub status: Status,
+    pub reason: Option<String>,
+    pub pending: Option<Pending>,
+    pub geometry: Option<Geometry>,
+    pub progress: ProgressMessage,
+    pub control: Option<Sender<Control>>,
+    /// Set by `stop` before the session thread exists (a queued session).
+    pub stop_requested: bool,
+}
+
+/// A session known to the hub.
+#[derive(Debug)]
+pub struct Live {
+    pub id: String,
+    pub spec: SessionSpec,
+    pub trainer_token: String,
+    pub kind: &'static str,
+    pub answer_timeout: std::time::Duration,
+    pub state: Mutex<LiveState>,
+    tx: broadcast::Sender<Arc<str>>,
+}
+
+/// What a trainer's answer got.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AnswerReply {
+    Ack(AnswerValue),
+    Refused(ProtocolError),
+}
+
+impl Live {
+    pub fn new(
+        id: String,
+        spec: SessionSpec,
+        trainer_token: String,
+        answer_timeout: std::time::Duration,
+    ) -> Self {
+        let (tx, _) = broadcast::channel(BROADCAST_CAPACITY);
+        let kind = spec.method.query_kind();
+        let progress = ProgressMessage {
+            budget: spec.budget,
+            unit: if spec.method.is_preference() {
+                "queries"
+            } else {
+                "steps"
+            },
+            ..Default::default()
+        };
+        Self {
+            id,
+            spec,
+            trainer_token,
+            kind,
+            answer_timeout,
+            state: Mutex::new(LiveState {
+                status: Status::Queued,
+                reason: None,
+                pending: None,
+                geometry: None,
+                progress,
+                control: None,
+                stop_requested: false,
+            }),
+            tx,
+        }
+    }
+
+    pub fn lock(&self) -> std::sync::MutexGuard<'_, LiveState> {
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    pub fn subscribe(&self) -> broadcast::Receiver<Arc<str>> {
+        self.tx.subscribe()
+    }
+
+    /// Send to every connected browser (none connected is fine).
+    pub fn broadcast(&self, text: Arc<str>) {
+        let _ = self.tx.send(text);
+    }
+
+    pub fn broadcast_message(&self, m: &ServerMessage) {
+        self.broadcast(m.to_text().into());
+    }
+
+    /// What a joining browser gets after `hello`: the pending query (with its time left) and
+    /// the progress.
+    pub fn catch_up(&self) -> Vec<Arc<str>> {
+        let s = self.lock();
+        let mut out = vec![ServerMessage::Progress(s.progress.clone()).to_text().into()];
+        if let Some(p) = &s.pending {
+            out.push(p.text.clone());
+        }
+        if !s.status.is_active() {
+            out.push(
+                ServerMessage::Ended {
+                    status: s.status,
+                    reason: s.reason.clone(),
+                }
+                .to_text()
+                .into(),
+            );
+        }
+        out
+    }
+
+    pub fn push_return(&self, r: f64) {
+        let mut s = self.lock();
+        let returns = &mut s.progress.recent_returns;
+        returns.push(r);
+        if returns.len() > RECENT_RETURNS {
+            returns.remove(0);
+        }
+    }
+
+    pub fn progress_message(&self) -> ServerMessage {
+        ServerMessage::Progress(self.lock().progress.clone())
+    }
+
+    /// Answer query `id` with `value` on behalf of `who` (`trainer` or `timeout`).
+    pub async fn answer(
+        &self,
+        store: &Store,
+        id: i64,
+        value: AnswerValue,
+        who: &str,
+    ) -> AnswerReply {
+        let refuse =
+            |code, message: String| AnswerReply::Refused(ProtocolError::new(code, message));
+        let pending = self.lock().pending.clone();
+        let pending = match pending {
+            Some(p) if p.id == id => p,
+            _ => return self.answer_not_pending(store, id, value).await,
+        };
+        if !value.fits(pending.kind) {
+            return refuse(
+                "bad_value",
+                format!(
+                    "query {id} is {}: answer {}",
+                    pending.kind,
+                    if pending.kind == "evaluative" {
+                        "1, 0 or -1"
+                    } else {
+                        "\"left\", \"right\", \"equal\" or \"skip\""
+                    }
+                ),
+            );
+        }
+        let latency_ms = pending.asked.elapsed().as_millis() as u64;
+        let outcome = match store
+            .commit_answer(id, &self.id, value, who, latency_ms)
+            .await
+        {
+            Ok(o) => o,
+            Err(e) => {
+                tracing::error!(session = %self.id, query = id, "storing an answer failed: {e}");
+                return refuse(
+                    "store_failed",
+                    "the answer could not be stored; try again".into(),
+                );
+            }
+        };
+        match outcome {
+            CommitOutcome::Committed => {
+                self.deliver(
+                    &pending,
+                    value,
+                    if who == "timeout" {
+                        "expired"
+                    } else {
+                        "answered"
+                    },
+                );
+                AnswerReply::Ack(value)
+            }
+            CommitOutcome::AlreadyAnswered(stored) => self.repeat(id, value, stored),
+        }
+    }
+
+    /// The committed answer goes to the session thread; the other browsers see the query go.
+    fn deliver(&self, pending: &Pending, value: AnswerValue, reason: &'static str) {
+        let mut s = self.lock();
+        if s.pending.as_ref().map(|p| p.id) == Some(pending.id) {
+            s.pending = None;
+            if s.status == Status::Waiting {
+                s.status = Status::Running;
+            }
+        }
+        s.progress.answered += 1;
+        if let Some(control) = &s.control {
+            let _ = control.send(Control::Answer {
+                seq: pending.seq,
+                value,
+            });
+        }
+        drop(s);
+        self.broadcast_message(&ServerMessage::Withdrawn {
+            id: pending.id,
+            reason,
+        });
+    }
+
+    fn repeat(&self, id: i64, value: AnswerValue, stored: AnswerValue) -> AnswerReply {
+        if stored == value {
+            AnswerReply::Ack(value)
+        } else {
+            AnswerReply::Refused(ProtocolError::new(
+                "already_answered",
+                format!(
+                    "query {id} was already answered with {}",
+                    serde_json::to_string(&stored).unwrap_or_default()
+                ),
+            ))
+        }
+    }
+
+    /// An answer for a query that is not the open one: a repeat, someone else's, or nonsense.
+    async fn answer_not_pending(&self, store: &Store, id: i64, value: AnswerValue) -> AnswerReply {
+        let refuse =
+            |code, message: String| AnswerReply::Refused(ProtocolError::new(code, message));
+        let query = match store.query(id).await {
+            Ok(q) => q,
+            Err(e) => {
+                tracing::error!("looking up query {id}: {e}");
+                return refuse(
+                    "store_failed",
+                    "the query could not be looked up; try again".into(),
+                );
+            }
+        };
+        match query {
+            Some(q) if q.session_id == self.id => match store.answer_value(id).await {
+                // Answered already (by this trainer, another one, or a timeout).
+                Ok(Some(stored)) => self.repeat(id, value, stored),
+                // Asked and not open: its session ended while it waited; a resume asks again.
+                Ok(None) => refuse(
+                    "expired",
+                    format!("query {id} is no longer open; the session asks again when it resumes"),
+                ),
+                Err(e) => {
+                    tracing::error!("looking up the answer to query {id}: {e}");
+                    refuse(
+                        "store_failed",
+                        "the answer could not be looked up; try again".into(),
+                    )
+                }
+            },
+            _ => refuse(
+                "unknown_query",
+                format!("query {id} does not belong to this session"),
+            ),
+        }
+    }
+}

@@ -1,0 +1,337 @@
+//! The hub: every session the server knows, started on their own threads under a cap on how
+//! many run at once (the rest queue), each paired with an async consumer of its events.
+//! Stop, resume and graceful shutdown go through here.
+//!
+//! - `live`: one session's live state and the answer path.
+//! - `consumer`: applies a session's events to the store and the browsers.
+//! - `sink`: the channel a session thread reports into.
+
+mod consumer;
+pub mod live;
+mod sink;
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use rand::Rng;
+use tokio::sync::Semaphore;
+use tokio::task::JoinHandle;
+
+pub use live::{AnswerReply, Live};
+
+use crate::session::{Controls, SessionContext, SessionSpec, run_session};
+use crate::store::{NewSession, SessionRow, Status, Store};
+
+/// How the hub runs sessions.
+#[derive(Clone, Debug)]
+pub struct HubConfig {
+    pub data_dir: PathBuf,
+    /// Where the synthetic trainers' experts are (`<task>.safetensors`).
+    pub models_dir: PathBuf,
+    /// Sessions running at once; the rest wait as `queued`.
+    pub max_running: usize,
+}
+
+pub struct Hub {
+    pub store: Store,
+    pub config: HubConfig,
+    live: Mutex<HashMap<String, Arc<Live>>>,
+    slots: Arc<Semaphore>,
+    tasks: Mutex<Vec<JoinHandle<()>>>,
+}
+
+/// Why the hub refused.
+#[derive(Debug, thiserror::Error)]
+pub enum HubError {
+    #[error("no session {0}")]
+    NotFound(String),
+    #[error("{0}")]
+    Conflict(String),
+    #[error("invalid session: {0}")]
+    Invalid(String),
+    #[error(transparent)]
+    Store(#[from] sqlx::Error),
+}
+
+/// A random lowercase-hex string of `bytes` bytes.
+pub fn random_hex(bytes: usize) -> String {
+    let mut rng = rand::rng();
+    (0..bytes)
+        .map(|_| format!("{:02x}", rng.random::<u8>()))
+        .collect()
+}
+
+impl Hub {
+    pub fn new(store: Store, config: HubConfig) -> Arc<Self> {
+        let slots = Arc::new(Semaphore::new(config.max_running.max(1)));
+        Arc::new(Self {
+            store,
+            config,
+            live: Mutex::new(HashMap::new()),
+            slots,
+            tasks: Mutex::new(Vec::new()),
+        })
+    }
+
+    /// After a restart: mark what was running as interrupted and start the queue again.
+    pub async fn recover(self: &Arc<Self>) -> Result<Vec<String>, HubError> {
+        let (interrupted, queued) = self.store.recover_after_restart().await?;
+        for id in queued {
+            if let Some(row) = self.store.session(&id).await? {
+                self.start(row)?;
+            }
+        }
+        Ok(interrupted)
+    }
+
+    /// Store a new session and queue it.
+    pub async fn launch(self: &Arc<Self>, spec: SessionSpec) -> Result<SessionRow, HubError> {
+        spec.validate().map_err(HubError::Invalid)?;
+        let id = random_hex(6);
+        let token = random_hex(16);
+        let config = serde_json::to_value(&spec).expect("specs serialise");
+        let method = spec.method.to_string();
+        let trainer = serde_json::to_value(spec.trainer).expect("kinds serialise");
+        let row = self
+            .store
+            .insert_session(NewSession {
+                id: &id,
+                task: spec.task.id(),
+                method: &method,
+                trainer: trainer.as_str().unwrap_or("human"),
+                seed: spec.seed,
+                budget: spec.budget,
+                config: &config,
+                trainer_token: &token,
+            })
+            .await?;
+        self.start(row.clone())?;
+        Ok(row)
+    }
+
+    pub fn live(&self, id: &str) -> Option<Arc<Live>> {
+        self.live
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .get(id)
+            .cloned()
+    }
+
+    /// Drop an ended session from the map (unless a resume already replaced it).
+    fn forget(&self, live: &Arc<Live>) {
+        let mut map = self.live.lock().unwrap_or_else(|e| e.into_inner());
+        if map.get(&live.id).is_some_and(|l| Arc::ptr_eq(l, live)) {
+            map.remove(&live.id);
+        }
+    }
+
+    /// Queue a stored session: wait for a slot, then run it on its own thread.
+    fn start(self: &Arc<Self>, row: SessionRow) -> Result<(), HubError> {
+        let spec: SessionSpec = serde_json::from_value(row.config.clone())
+            .map_err(|e| HubError::Invalid(format!("stored config of {}: {e}", row.id)))?;
+        let timeout = spec.settings().map_err(HubError::Invalid)?.answer_timeout_s;
+        let live = Arc::new(Live::new(
+            row.id.clone(),
+            spec,
+            row.trainer_token.clone(),
+            Duration::from_secs_f64(timeout),
+        ));
+        {
+            let mut map = self.live.lock().unwrap_or_else(|e| e.into_inner());
+            if map
+                .get(&row.id)
+                .is_some_and(|l| l.lock().status.is_active())
+            {
+                return Err(HubError::Conflict(format!(
+                    "session {} is already {}",
+                    row.id, "active"
+                )));
+            }
+            map.insert(row.id.clone(), live.clone());
+        }
+        let hub = self.clone();
+        let task = tokio::spawn(async move { hub.run(live).await });
+        let mut tasks = self.tasks.lock().unwrap_or_else(|e| e.into_inner());
+        tasks.retain(|t| !t.is_finished());
+        tasks.push(task);
+        Ok(())
+    }
+
+    async fn run(self: Arc<Self>, live: Arc<Live>) {
+        let Ok(_slot) = self.slots.clone().acquire_owned().await else {
+            return; // the hub is shutting down
+        };
+        if live.lock().stop_requested {
+            self.forget(&live); // stopped while queued; `stop` stored the status
+            return;
+        }
+        let id = live.id.clone();
+        let (stored_answers, checkpoint) = match (
+            self.store.replay_answers(&id).await,
+            self.store.latest_checkpoint(&id).await,
+        ) {
+            (Ok(a), Ok(c)) => (a, c),
+            (Err(e), _) | (_, Err(e)) => {
+                tracing::error!(session = %id, "reading the session's answers: {e}");
+                let _ = self
+                    .store
+                    .set_status(&id, Status::Failed, Some(&e.to_string()))
+                    .await;
+                live.lock().status = Status::Failed;
+                self.forget(&live);
+                return;
+            }
+        };
+        // A checkpoint is checked only if the replay reaches it with stored answers alone.
+        let verify = checkpoint
+            .filter(|c| c.answers as usize <= stored_answers.len())
+            .map(|c| (c.progress as u64, c.digest));
+        let (control_tx, control_rx) = std::sync::mpsc::channel();
+        let (event_tx, event_rx) = tokio::sync::mpsc::unbounded_channel();
+        live.lock().control = Some(control_tx);
+        let ctx = SessionContext {
+            sink: Arc::new(sink::ChannelSink(event_tx.clone())),
+            controls: Controls::new(control_rx),
+            stored_answers,
+            verify,
+            models_dir: self.config.models_dir.clone(),
+        };
+        let spec = live.spec.clone();
+        let spawned = std::thread::Builder::new()
+            .name(format!("session-{id}"))
+            .spawn(move || {
+                let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    run_session(&spec, ctx)
+                }));
+                if let Err(panic) = result {
+                    let what = panic
+                        .downcast_ref::<String>()
+                        .cloned()
+                        .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                        .unwrap_or_else(|| "unknown".into());
+                    let _ = event_tx.send(crate::session::SessionEvent::Ended(
+                        crate::session::Ending::Failed(format!("the session panicked: {what}")),
+                    ));
+                }
+            });
+        if let Err(e) = spawned {
+            let _ = self
+                .store
+                .set_status(&id, Status::Failed, Some(&format!("no thread: {e}")))
+                .await;
+            return;
+        }
+        consumer::consume(self.clone(), live, event_rx).await;
+    }
+
+    /// Stop a session for good (it can still be resumed later).
+    pub async fn stop(&self, id: &str) -> Result<(), HubError> {
+        let row = self
+            .store
+            .session(id)
+            .await?
+            .ok_or_else(|| HubError::NotFound(id.into()))?;
+        let Some(live) = self.live(id).filter(|l| l.lock().status.is_active()) else {
+            return Err(HubError::Conflict(format!(
+                "session {id} is {}, not running",
+                row.status.as_str()
+            )));
+        };
+        let queued = {
+            let mut s = live.lock();
+            s.stop_requested = true;
+            match &s.control {
+                Some(c) => {
+                    let _ = c.send(crate::session::Control::Stop);
+                    false
+                }
+                None => {
+                    s.status = Status::Stopped;
+                    true
+                }
+            }
+        };
+        if queued {
+            self.store
+                .set_status(id, Status::Stopped, Some("stopped while queued"))
+                .await?;
+        }
+        Ok(())
+    }
+
+    /// Continue an interrupted, stopped or failed session: it replays its stored answers (never
+    /// asking them again) and goes on.
+    pub async fn resume(self: &Arc<Self>, id: &str) -> Result<SessionRow, HubError> {
+        let row = self
+            .store
+            .session(id)
+            .await?
+            .ok_or_else(|| HubError::NotFound(id.into()))?;
+        let live_status = self.live(id).map(|l| l.lock().status);
+        let status = live_status.unwrap_or(row.status);
+        if !status.is_resumable() {
+            return Err(HubError::Conflict(format!(
+                "session {id} is {}: only interrupted, stopped or failed sessions resume",
+                status.as_str()
+            )));
+        }
+        self.store.set_status(id, Status::Queued, None).await?;
+        let row = self
+            .store
+            .session(id)
+            .await?
+            .ok_or_else(|| HubError::NotFound(id.into()))?;
+        self.start(row.clone())?;
+        Ok(row)
+    }
+
+    /// The status a client should see: the live one while the hub runs the session.
+    pub fn status_of(&self, row: &SessionRow) -> Status {
+        self.live(&row.id).map_or(row.status, |l| l.lock().status)
+    }
+
+    /// Graceful shutdown: every running session checkpoints and ends as `interrupted`; browsers
+    /// get `ended`. Queued sessions stay queued for the next start.
+    pub async fn shutdown(&self, grace: Duration) {
+        self.slots.close();
+        let lives: Vec<Arc<Live>> = self
+            .live
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .values()
+            .cloned()
+            .collect();
+        for live in &lives {
+            if let Some(c) = &live.lock().control {
+                let _ = c.send(crate::session::Control::Shutdown);
+            }
+        }
+        let tasks: Vec<JoinHandle<()>> =
+            std::mem::take(&mut *self.tasks.lock().unwrap_or_else(|e| e.into_inner()));
+        let all = futures_util::future::join_all(tasks);
+        if tokio::time::timeout(grace, all).await.is_err() {
+            tracing::warn!(
+                "sessions did not finish within {grace:?}; they will be marked interrupted at the next start"
+            );
+        }
+    }
+
+    /// Write a learner checkpoint to `<data dir>/checkpoints/<id>.safetensors` (atomically) and
+    /// return its path relative to the data dir.
+    async fn write_checkpoint(&self, id: &str, bytes: Vec<u8>) -> std::io::Result<String> {
+        let dir = self.config.data_dir.join("checkpoints");
+        let relative = format!("checkpoints/{id}.safetensors");
+        let path = self.config.data_dir.join(&relative);
+        tokio::task::spawn_blocking(move || {
+            std::fs::create_dir_all(&dir)?;
+            let tmp = path.with_extension("safetensors.tmp");
+            std::fs::write(&tmp, bytes)?;
+            std::fs::rename(&tmp, &path)
+        })
+        .await
+        .map_err(std::io::Error::other)??;
+        Ok(relative)
+    }
+}

@@ -1,0 +1,287 @@
+//! What a session thread tells the async side, and what it is told: plain values over channels,
+//! so the session loop needs no runtime. The server implements [`SessionSink`] with a tokio
+//! channel; tests implement it with a `Vec`.
+
+use std::sync::mpsc::{Receiver, RecvTimeoutError};
+use std::time::Duration;
+
+use serde::{Deserialize, Serialize};
+
+use crate::guidance::drpl::trainer::Preference;
+use crate::guidance::evaluative_run::EpisodeRecord;
+use crate::guidance::evaluative_trainer::Evaluation;
+use crate::sim::{Geometry, RenderState};
+
+use super::query::QueryContent;
+
+/// A trainer's answer as the websocket carries it: `1 | 0 | -1` or `"left" | "right" | "equal" |
+/// "skip"`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum AnswerValue {
+    Evaluation(i8),
+    Preference(Preference),
+}
+
+impl AnswerValue {
+    pub fn evaluation(e: Evaluation) -> Self {
+        AnswerValue::Evaluation(e.value() as i8)
+    }
+
+    /// The evaluative answer, if this is one with a valid value.
+    pub fn as_evaluation(self) -> Option<Evaluation> {
+        match self {
+            AnswerValue::Evaluation(v) => Evaluation::from_value(i64::from(v)),
+            AnswerValue::Preference(_) => None,
+        }
+    }
+
+    pub fn as_preference(self) -> Option<Preference> {
+        match self {
+            AnswerValue::Preference(p) => Some(p),
+            AnswerValue::Evaluation(_) => None,
+        }
+    }
+
+    /// Whether this value answers a query of `kind` (`evaluative` or `preference`).
+    pub fn fits(self, kind: &str) -> bool {
+        match kind {
+            "evaluative" => self.as_evaluation().is_some(),
+            "preference" => self.as_preference().is_some(),
+            _ => false,
+        }
+    }
+
+    /// What a trainer who never answered gave: "no feedback" (as the paper allows) or a skip.
+    pub fn timeout(kind: &str) -> Self {
+        if kind == "preference" {
+            AnswerValue::Preference(Preference::Skip)
+        } else {
+            AnswerValue::Evaluation(0)
+        }
+    }
+
+    /// The value as a number for scalars and plots (preferences: left 1, right -1, else 0).
+    pub fn as_number(self) -> f64 {
+        match self {
+            AnswerValue::Evaluation(v) => f64::from(v),
+            AnswerValue::Preference(Preference::Left) => 1.0,
+            AnswerValue::Preference(Preference::Right) => -1.0,
+            AnswerValue::Preference(_) => 0.0,
+        }
+    }
+}
+
+/// One rendered step for watching browsers.
+#[derive(Clone, Debug, Serialize)]
+pub struct Frame {
+    pub step: u64,
+    pub episode: u64,
+    pub state: RenderState,
+    /// Sent with the first frame of every episode (Lunar Lander's terrain changes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub geometry: Option<Geometry>,
+    pub reward: f32,
+    pub episode_return: f64,
+}
+
+/// How a session thread ended.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Ending {
+    Finished,
+    /// A researcher stopped it.
+    Stopped,
+    /// The server shut down; it can be resumed.
+    Interrupted,
+    Failed(String),
+}
+
+/// A checkpoint: where the session was, and a digest of the learner that a resumed session's
+/// replay must reproduce.
+#[derive(Clone, Debug)]
+pub struct Checkpoint {
+    /// Steps (evaluative) or queries (preference) done.
+    pub progress: u64,
+    /// Queries answered so far (all of them replayable from the store).
+    pub answers: u64,
+    pub digest: String,
+    /// The learner's safetensors bytes (evaluative sessions).
+    pub weights: Option<Vec<u8>>,
+}
+
+/// Everything a session reports, in order.
+#[derive(Clone, Debug)]
+pub enum SessionEvent {
+    /// The session built its run and is about to take its first step (after `replayed` stored
+    /// answers it will not ask again).
+    Started {
+        replayed: u64,
+    },
+    Frame(Box<Frame>),
+    /// A query for people: the session now waits for `Control::Answer` with this `seq`.
+    Query {
+        seq: u64,
+        step: u64,
+        abstract_state: u32,
+        content: Box<QueryContent>,
+    },
+    /// A synthetic trainer's query and answer together (nobody waits).
+    Answered {
+        seq: u64,
+        step: u64,
+        abstract_state: u32,
+        kind: &'static str,
+        value: AnswerValue,
+    },
+    Episode(EpisodeRecord),
+    /// A preference session's posterior after an answer.
+    Alignment {
+        queries: u64,
+        alignment: f64,
+        alignment_of_mean: f64,
+    },
+    /// Steps or queries done (sent at most a few times a second).
+    Progress {
+        progress: u64,
+    },
+    Checkpoint(Checkpoint),
+    Ended(Ending),
+}
+
+/// Where a session thread sends its events. `send` never blocks for long.
+pub trait SessionSink: Send + Sync {
+    fn send(&self, event: SessionEvent);
+}
+
+/// What the async side tells a session thread.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Control {
+    /// The committed answer to query `seq`.
+    Answer { seq: u64, value: AnswerValue },
+    /// Stop for good (a researcher's request).
+    Stop,
+    /// Checkpoint and end as interrupted (graceful shutdown); resumable.
+    Shutdown,
+}
+
+/// Why a session must leave its loop early.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Halt {
+    Stop,
+    Shutdown,
+}
+
+/// The session thread's end of the control channel.
+pub struct Controls {
+    rx: Receiver<Control>,
+    halt: Option<Halt>,
+}
+
+impl Controls {
+    pub fn new(rx: Receiver<Control>) -> Self {
+        Self { rx, halt: None }
+    }
+
+    /// A stop or shutdown received so far, without waiting. Answers arriving outside a wait are
+    /// stale (the query was answered by a timeout or replay) and dropped.
+    pub fn poll(&mut self) -> Option<Halt> {
+        while self.halt.is_none() {
+            match self.rx.try_recv() {
+                Ok(c) => self.note(c),
+                Err(std::sync::mpsc::TryRecvError::Empty) => break,
+                // The server dropped the session: treat as a shutdown.
+                Err(std::sync::mpsc::TryRecvError::Disconnected) => {
+                    self.halt = Some(Halt::Shutdown)
+                }
+            }
+        }
+        self.halt
+    }
+
+    fn note(&mut self, control: Control) {
+        match control {
+            Control::Stop => self.halt = Some(Halt::Stop),
+            Control::Shutdown => self.halt = Some(Halt::Shutdown),
+            Control::Answer { .. } => {}
+        }
+    }
+
+    /// Block until the answer to `seq` or a halt. The async side owns timeouts (it commits a
+    /// timeout answer and sends it here), so that exactly one answer per query is ever stored.
+    pub fn wait_answer(&mut self, seq: u64) -> Result<AnswerValue, Halt> {
+        loop {
+            if let Some(h) = self.halt {
+                return Err(h);
+            }
+            match self.rx.recv_timeout(Duration::from_secs(3600)) {
+                Ok(Control::Answer { seq: s, value }) if s == seq => return Ok(value),
+                Ok(other) => self.note(other),
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => self.halt = Some(Halt::Shutdown),
+            }
+        }
+    }
+
+    /// Sleep up to `d`, waking early for a halt.
+    pub fn sleep(&mut self, d: Duration) -> Option<Halt> {
+        if self.halt.is_some() {
+            return self.halt;
+        }
+        match self.rx.recv_timeout(d) {
+            Ok(c) => {
+                self.note(c);
+                self.poll()
+            }
+            Err(RecvTimeoutError::Timeout) => None,
+            Err(RecvTimeoutError::Disconnected) => {
+                self.halt = Some(Halt::Shutdown);
+                self.halt
+            }
+        }
+    }
+
+    pub fn halted(&self) -> Option<Halt> {
+        self.halt
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn answer_values_parse_from_the_wire_forms() {
+        let v: AnswerValue = serde_json::from_str("-1").unwrap();
+        assert_eq!(v.as_evaluation(), Some(Evaluation::Bad));
+        let v: AnswerValue = serde_json::from_str("\"equal\"").unwrap();
+        assert_eq!(v.as_preference(), Some(Preference::Equal));
+        assert!(serde_json::from_str::<AnswerValue>("\"maybe\"").is_err());
+        assert!(!AnswerValue::Evaluation(2).fits("evaluative"));
+        assert!(!AnswerValue::Evaluation(1).fits("preference"));
+        assert_eq!(
+            serde_json::to_string(&AnswerValue::timeout("preference")).unwrap(),
+            "\"skip\""
+        );
+    }
+
+    #[test]
+    fn a_wait_returns_the_matching_answer_and_drops_stale_ones() {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let mut c = Controls::new(rx);
+        tx.send(Control::Answer {
+            seq: 3,
+            value: AnswerValue::Evaluation(1),
+        })
+        .unwrap();
+        tx.send(Control::Answer {
+            seq: 4,
+            value: AnswerValue::Evaluation(-1),
+        })
+        .unwrap();
+        assert_eq!(c.wait_answer(4), Ok(AnswerValue::Evaluation(-1)));
+        tx.send(Control::Stop).unwrap();
+        assert_eq!(c.wait_answer(5), Err(Halt::Stop));
+        drop(tx);
+        assert_eq!(c.poll(), Some(Halt::Stop));
+    }
+}

@@ -1,0 +1,19 @@
+//! One training session as a plain loop on its own thread. It talks to the async side only
+//! through channels (`events`), so it runs unchanged under the server, in tests and headless.
+//!
+//! - `spec`: what a session is (task, method, trainer kind, seed, budget, parameters).
+//! - `events`: what the loop reports and the controls it obeys; answer values.
+//! - `query`: what a person is shown (clips, predicates).
+//! - `runner`: the loop: pacing, frames, asking, replaying stored answers, checkpoints.
+
+pub mod events;
+pub mod query;
+pub mod runner;
+pub mod spec;
+
+pub use events::{
+    AnswerValue, Checkpoint, Control, Controls, Ending, Frame, SessionEvent, SessionSink,
+};
+pub use query::{Clip, QueryContent};
+pub use runner::{SessionContext, digest, run_session};
+pub use spec::{SessionMethod, SessionSettings, SessionSpec, TrainerKind};

@@ -1,0 +1,492 @@
+//! The session loop: builds the run from its spec and drives it on the calling thread (the
+//! server gives each session its own), pacing human sessions to a watchable rate, streaming
+//! frames, asking people through the control channel, replaying stored answers after a resume,
+//! and checkpointing.
+
+use std::collections::VecDeque;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use crate::guidance::drpl::pool::QueryPool;
+use crate::guidance::drpl::run::PreferenceRun;
+use crate::guidance::drpl::trainer::{
+    Preference, PreferenceQuery, PreferenceTrainer, SyntheticOracle,
+};
+use crate::guidance::drpl::trajectories::{self, Trajectory};
+use crate::guidance::evaluative_run::EvaluativeRun;
+use crate::guidance::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
+use crate::guidance::expert_oracle::{ExpertOracle, OracleRule};
+use crate::guidance::feedback_schedule::EvaluativeMethod;
+use crate::rl::Sac;
+use crate::scene_graph::SceneGraph;
+use crate::sim::Task;
+
+use super::events::{
+    AnswerValue, Checkpoint, Controls, Ending, Frame, Halt, SessionEvent, SessionSink,
+};
+use super::query::{self, FrameHistory, QueryContent};
+use super::spec::{RunConfig, SessionSettings, SessionSpec, TrainerKind};
+
+/// How often a running session reports its progress.
+const PROGRESS_EVERY: Duration = Duration::from_millis(250);
+
+/// Everything a session thread gets besides its spec.
+pub struct SessionContext {
+    pub sink: Arc<dyn SessionSink>,
+    pub controls: Controls,
+    /// Answers already stored for this session, by query order: replayed, never asked again.
+    pub stored_answers: Vec<AnswerValue>,
+    /// The latest checkpoint `(progress, digest)`: a resumed session checks its replay against it.
+    pub verify: Option<(u64, String)>,
+    /// Where the synthetic trainer's experts live (`<dir>/<task>.safetensors`).
+    pub models_dir: PathBuf,
+}
+
+/// Run the session to its end and report how it ended (also sent as `SessionEvent::Ended`).
+pub fn run_session(spec: &SessionSpec, ctx: SessionContext) -> Ending {
+    let sink = ctx.sink.clone();
+    let ending = match run(spec, ctx) {
+        Ok(ending) => ending,
+        Err(reason) => Ending::Failed(reason),
+    };
+    sink.send(SessionEvent::Ended(ending.clone()));
+    ending
+}
+
+fn run(spec: &SessionSpec, ctx: SessionContext) -> Result<Ending, String> {
+    let settings = spec.settings()?;
+    match spec.run_config()? {
+        RunConfig::Evaluative(config) => {
+            let run = EvaluativeRun::new(config, spec.budget);
+            run_evaluative(spec, settings, run, ctx)
+        }
+        RunConfig::Preference(config) => {
+            // As `PreferenceRun::new`, but keeping the trajectories to render clips from.
+            let trajs = trajectories::collect(
+                config.task,
+                &config.scene_graph,
+                config.trajectories,
+                config.max_steps,
+                &mut trajectories::rng(config.seed),
+            );
+            let pool = QueryPool::from_trajectories(config.task, &trajs, config.min_run);
+            let run = PreferenceRun::with_pool(config, pool);
+            run_preference(spec, run, trajs, ctx)
+        }
+    }
+}
+
+/// FNV-1a over bytes, as hex: a digest that is stable across builds and platforms.
+pub fn digest(bytes: &[u8]) -> String {
+    let hash = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    });
+    format!("{hash:016x}")
+}
+
+/// Ends the loop early when the replay does not reproduce the checkpoint it resumes from.
+fn check_replay(
+    verify: &Option<(u64, String)>,
+    progress: u64,
+    digest_now: impl FnOnce() -> String,
+) -> Result<(), String> {
+    match verify {
+        Some((at, expected)) if *at == progress => {
+            let got = digest_now();
+            if &got == expected {
+                Ok(())
+            } else {
+                Err(format!(
+                    "the resumed session's replay diverged from its checkpoint at {progress} (digest {got}, stored {expected})"
+                ))
+            }
+        }
+        _ => Ok(()),
+    }
+}
+
+fn load_expert(dir: &Path, task: Task) -> Result<Sac, String> {
+    let path = dir.join(format!("{task}.safetensors"));
+    let bytes = std::fs::read(&path).map_err(|e| {
+        format!(
+            "the synthetic trainer needs an expert at {} ({e}); train one with `dualrep expert --task {task}`",
+            path.display()
+        )
+    })?;
+    Sac::from_safetensors(&bytes).map_err(|e| format!("loading the expert {}: {e}", path.display()))
+}
+
+/// Asks the session's queries: replays stored answers first, then asks people through the
+/// control channel (human sessions) or reports a synthetic trainer's answers (so they are stored).
+struct Asker {
+    sink: Arc<dyn SessionSink>,
+    controls: Controls,
+    replay: VecDeque<AnswerValue>,
+    seq: u64,
+    /// A halt came while a query was open: the last answer was not given by anyone.
+    aborted: bool,
+}
+
+impl Asker {
+    fn replaying(&self) -> bool {
+        !self.replay.is_empty()
+    }
+
+    /// A person's answer to the next query (`None` if the session halted while waiting).
+    fn ask(
+        &mut self,
+        step: u64,
+        abstract_state: u32,
+        content: impl FnOnce() -> QueryContent,
+    ) -> Option<AnswerValue> {
+        let seq = self.seq;
+        self.seq += 1;
+        if let Some(v) = self.replay.pop_front() {
+            return Some(v);
+        }
+        if self.controls.halted().is_some() {
+            self.aborted = true;
+            return None;
+        }
+        self.sink.send(SessionEvent::Query {
+            seq,
+            step,
+            abstract_state,
+            content: Box::new(content()),
+        });
+        match self.controls.wait_answer(seq) {
+            Ok(v) => Some(v),
+            Err(_) => {
+                self.aborted = true;
+                None
+            }
+        }
+    }
+
+    /// A synthetic trainer answered the next query.
+    fn report(&mut self, step: u64, abstract_state: u32, kind: &'static str, value: AnswerValue) {
+        self.replay.pop_front();
+        self.sink.send(SessionEvent::Answered {
+            seq: self.seq,
+            step,
+            abstract_state,
+            kind,
+            value,
+        });
+        self.seq += 1;
+    }
+}
+
+/// Who judges an evaluative session's steps.
+enum Judge {
+    /// People: the clip of the episode so far goes with each query.
+    Human {
+        history: FrameHistory,
+        graph: SceneGraph,
+    },
+    /// The expert oracle (EF, DREF) or nobody (SAC).
+    Synthetic(Box<dyn EvaluativeTrainer>),
+}
+
+struct EvaluativeAsker {
+    asker: Asker,
+    judge: Judge,
+}
+
+impl EvaluativeTrainer for EvaluativeAsker {
+    fn evaluate(&mut self, q: &EvaluativeQuery<'_>) -> Evaluation {
+        match &mut self.judge {
+            Judge::Human { history, graph } => self
+                .asker
+                .ask(q.step, q.abstract_state.0, || QueryContent::Evaluative {
+                    clip: history.clip().expect("the history starts with the episode"),
+                    action: q.action.to_vec(),
+                    holding: graph.holding(q.abstract_state),
+                    predicted: q.predicted,
+                })
+                .and_then(AnswerValue::as_evaluation)
+                .unwrap_or(Evaluation::NoFeedback),
+            Judge::Synthetic(oracle) => {
+                let e = oracle.evaluate(q);
+                self.asker.report(
+                    q.step,
+                    q.abstract_state.0,
+                    "evaluative",
+                    AnswerValue::evaluation(e),
+                );
+                e
+            }
+        }
+    }
+}
+
+/// Who compares a preference session's pairs.
+enum Comparer {
+    Human {
+        task: Task,
+        graph: SceneGraph,
+        trajectories: Vec<Trajectory>,
+    },
+    Synthetic(SyntheticOracle),
+}
+
+struct PreferenceAsker {
+    asker: Asker,
+    comparer: Comparer,
+}
+
+impl PreferenceTrainer for PreferenceAsker {
+    fn compare(&mut self, q: &PreferenceQuery<'_>) -> Preference {
+        let state = q.left.abstract_state.map_or(0, |s| s.0);
+        match &mut self.comparer {
+            Comparer::Human {
+                task,
+                graph,
+                trajectories,
+            } => self
+                .asker
+                .ask(q.query as u64, state, || QueryContent::Preference {
+                    left: query::render_clip(*task, &trajectories[q.left.trajectory], q.left),
+                    right: query::render_clip(*task, &trajectories[q.right.trajectory], q.right),
+                    left_holding: query::holding(graph, q.left.abstract_state),
+                    right_holding: query::holding(graph, q.right.abstract_state),
+                    predicate: q.predicate.map(|i| graph.predicates()[i]),
+                })
+                .and_then(AnswerValue::as_preference)
+                .unwrap_or(Preference::Skip),
+            Comparer::Synthetic(oracle) => {
+                let p = oracle.compare(q);
+                self.asker.report(
+                    q.query as u64,
+                    state,
+                    "preference",
+                    AnswerValue::Preference(p),
+                );
+                p
+            }
+        }
+    }
+}
+
+/// The trainer that never answers (plain SAC asks nothing).
+struct Silent;
+
+impl EvaluativeTrainer for Silent {
+    fn evaluate(&mut self, _: &EvaluativeQuery<'_>) -> Evaluation {
+        Evaluation::NoFeedback
+    }
+}
+
+fn halt_ending(h: Halt) -> Ending {
+    match h {
+        Halt::Stop => Ending::Stopped,
+        Halt::Shutdown => Ending::Interrupted,
+    }
+}
+
+fn evaluative_checkpoint(run: &EvaluativeRun) -> Checkpoint {
+    let weights = run.learner().to_safetensors();
+    Checkpoint {
+        progress: run.steps(),
+        answers: run.feedback_count(),
+        digest: digest(&weights),
+        weights: Some(weights),
+    }
+}
+
+fn run_evaluative(
+    spec: &SessionSpec,
+    settings: SessionSettings,
+    mut run: EvaluativeRun,
+    ctx: SessionContext,
+) -> Result<Ending, String> {
+    let human = spec.trainer == TrainerKind::Human;
+    let judge = if human {
+        let mut history = FrameHistory::new(settings.clip_frames);
+        history.start_episode(run.env().geometry(), run.env().render());
+        Judge::Human {
+            history,
+            graph: run.config().scene_graph,
+        }
+    } else {
+        Judge::Synthetic(match run.config().method {
+            EvaluativeMethod::Sac => Box::new(Silent),
+            _ => {
+                let expert = load_expert(&ctx.models_dir, spec.task)?;
+                let act_dim = run.env().spec().action_space.dim();
+                Box::new(ExpertOracle::new(expert, act_dim, OracleRule::Authors))
+            }
+        })
+    };
+    let sink = ctx.sink.clone();
+    sink.send(SessionEvent::Started {
+        replayed: ctx.stored_answers.len() as u64,
+    });
+    let mut trainer = EvaluativeAsker {
+        asker: Asker {
+            sink: ctx.sink,
+            controls: ctx.controls,
+            replay: ctx.stored_answers.into(),
+            seq: 0,
+            aborted: false,
+        },
+        judge,
+    };
+
+    let period = Duration::from_secs_f64(1.0 / settings.pace_hz);
+    let mut next_tick = Instant::now();
+    let mut last_progress = Instant::now();
+    let (mut episode, mut episode_return, mut new_episode) = (0u64, 0.0f64, false);
+    while run.steps() < spec.budget {
+        if let Some(h) = trainer.asker.controls.poll() {
+            return Ok(end_evaluative(h, &run, sink.as_ref(), false));
+        }
+        let report = run.step(&mut trainer);
+        if trainer.asker.aborted {
+            let h = trainer.asker.controls.halted().unwrap_or(Halt::Shutdown);
+            return Ok(end_evaluative(h, &run, sink.as_ref(), true));
+        }
+        episode_return += f64::from(report.reward);
+        // Catching up on stored answers after a resume: no frames, no pacing.
+        let live = human && !trainer.asker.replaying();
+        if let Judge::Human { history, .. } = &mut trainer.judge {
+            let state = run.env().render();
+            if report.episode.is_some() {
+                history.start_episode(run.env().geometry(), state.clone());
+            } else {
+                history.push(state.clone());
+            }
+            if live {
+                sink.send(SessionEvent::Frame(Box::new(Frame {
+                    step: run.steps(),
+                    episode,
+                    state,
+                    geometry: new_episode.then(|| run.env().geometry()),
+                    reward: report.reward,
+                    episode_return,
+                })));
+            }
+        }
+        new_episode = report.episode.is_some();
+        if let Some(e) = report.episode {
+            sink.send(SessionEvent::Episode(e));
+            episode += 1;
+            episode_return = 0.0;
+        }
+        check_replay(&ctx.verify, run.steps(), || {
+            digest(&run.learner().to_safetensors())
+        })?;
+        if settings.checkpoint_every > 0 && run.steps().is_multiple_of(settings.checkpoint_every) {
+            sink.send(SessionEvent::Checkpoint(evaluative_checkpoint(&run)));
+        }
+        if last_progress.elapsed() >= PROGRESS_EVERY {
+            last_progress = Instant::now();
+            sink.send(SessionEvent::Progress {
+                progress: run.steps(),
+            });
+        }
+        if live {
+            next_tick += period;
+            let now = Instant::now();
+            if next_tick > now {
+                if let Some(h) = trainer.asker.controls.sleep(next_tick - now) {
+                    return Ok(end_evaluative(h, &run, sink.as_ref(), false));
+                }
+            } else {
+                // Running behind (a slow update or a long wait for an answer): go on at the
+                // pace from here rather than catching up in a burst.
+                next_tick = now;
+            }
+        }
+    }
+    sink.send(SessionEvent::Progress {
+        progress: run.steps(),
+    });
+    sink.send(SessionEvent::Checkpoint(evaluative_checkpoint(&run)));
+    Ok(Ending::Finished)
+}
+
+/// Leave early: on shutdown, checkpoint first unless the last step used an answer nobody gave
+/// (a replay could not reproduce it; the previous checkpoint stands).
+fn end_evaluative(h: Halt, run: &EvaluativeRun, sink: &dyn SessionSink, aborted: bool) -> Ending {
+    if h == Halt::Shutdown && !aborted {
+        sink.send(SessionEvent::Checkpoint(evaluative_checkpoint(run)));
+    }
+    halt_ending(h)
+}
+
+fn preference_checkpoint(run: &PreferenceRun) -> Checkpoint {
+    let mean: Vec<u8> = run
+        .belief()
+        .mean()
+        .iter()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    Checkpoint {
+        progress: run.queries() as u64,
+        answers: run.queries() as u64,
+        digest: digest(&mean),
+        weights: None,
+    }
+}
+
+fn run_preference(
+    spec: &SessionSpec,
+    mut run: PreferenceRun,
+    trajectories: Vec<Trajectory>,
+    ctx: SessionContext,
+) -> Result<Ending, String> {
+    let comparer = match spec.trainer {
+        TrainerKind::Human => Comparer::Human {
+            task: spec.task,
+            graph: run.config().scene_graph,
+            trajectories,
+        },
+        TrainerKind::Synthetic => {
+            Comparer::Synthetic(SyntheticOracle::new(run.theta_true().to_vec()))
+        }
+    };
+    let sink = ctx.sink.clone();
+    sink.send(SessionEvent::Started {
+        replayed: ctx.stored_answers.len() as u64,
+    });
+    let mut trainer = PreferenceAsker {
+        asker: Asker {
+            sink: ctx.sink,
+            controls: ctx.controls,
+            replay: ctx.stored_answers.into(),
+            seq: 0,
+            aborted: false,
+        },
+        comparer,
+    };
+    while (run.queries() as u64) < spec.budget {
+        if let Some(h) = trainer.asker.controls.poll() {
+            if h == Halt::Shutdown {
+                sink.send(SessionEvent::Checkpoint(preference_checkpoint(&run)));
+            }
+            return Ok(halt_ending(h));
+        }
+        let Some(report) = run.step(&mut trainer) else {
+            break; // the method has no new pair left
+        };
+        if trainer.asker.aborted {
+            let h = trainer.asker.controls.halted().unwrap_or(Halt::Shutdown);
+            return Ok(halt_ending(h));
+        }
+        sink.send(SessionEvent::Alignment {
+            queries: report.query as u64,
+            alignment: report.alignment,
+            alignment_of_mean: report.alignment_of_mean,
+        });
+        sink.send(SessionEvent::Progress {
+            progress: run.queries() as u64,
+        });
+        check_replay(&ctx.verify, run.queries() as u64, || {
+            preference_checkpoint(&run).digest
+        })?;
+    }
+    sink.send(SessionEvent::Checkpoint(preference_checkpoint(&run)));
+    Ok(Ending::Finished)
+}

@@ -1,0 +1,69 @@
+//! The `episodes` table: one row per finished episode of an evaluative session.
+
+use serde::Serialize;
+use sqlx::Row;
+
+use super::{Result, Store};
+use crate::guidance::evaluative_run::EpisodeRecord;
+
+/// One finished episode, as `GET /api/sessions/{id}/episodes` lists it.
+#[derive(Clone, Debug, Serialize)]
+pub struct EpisodeRow {
+    pub episode: i64,
+    pub step: i64,
+    #[serde(rename = "return")]
+    pub episode_return: f64,
+    pub length: i64,
+    pub cumulative_return: f64,
+    pub feedback_count: i64,
+    pub feedback_fraction: f64,
+    pub outcome: String,
+}
+
+impl Store {
+    /// Store an episode; a resumed session's replay stores the same episodes again, which
+    /// replaces them with identical rows.
+    pub async fn insert_episode(&self, session_id: &str, e: &EpisodeRecord) -> Result<()> {
+        let outcome = serde_json::to_value(e.outcome)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_owned))
+            .unwrap_or_default();
+        sqlx::query(
+            "INSERT OR REPLACE INTO episodes
+             (session_id, episode, step, return, length, cumulative_return, feedback_count, feedback_fraction, outcome)
+             VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
+        )
+        .bind(session_id)
+        .bind(e.episode as i64)
+        .bind(e.step as i64)
+        .bind(e.episode_return)
+        .bind(i64::from(e.length))
+        .bind(e.cumulative_return)
+        .bind(e.feedback_count as i64)
+        .bind(e.feedback_fraction)
+        .bind(outcome)
+        .execute(self.pool())
+        .await?;
+        Ok(())
+    }
+
+    pub async fn episodes(&self, session_id: &str) -> Result<Vec<EpisodeRow>> {
+        let rows = sqlx::query("SELECT * FROM episodes WHERE session_id = ? ORDER BY episode")
+            .bind(session_id)
+            .fetch_all(self.pool())
+            .await?;
+        Ok(rows
+            .iter()
+            .map(|r| EpisodeRow {
+                episode: r.get("episode"),
+                step: r.get("step"),
+                episode_return: r.get("return"),
+                length: r.get("length"),
+                cumulative_return: r.get("cumulative_return"),
+                feedback_count: r.get("feedback_count"),
+                feedback_fraction: r.get("feedback_fraction"),
+                outcome: r.get("outcome"),
+            })
+            .collect())
+    }
+}

@@ -1,0 +1,89 @@
+//! The database: SQLite through sqlx, schema in `migrations/` (applied at open). One file per
+//! table family. WAL mode with `synchronous = FULL`, so a committed answer survives a killed
+//! process and a power cut alike; answers are acknowledged only after their commit.
+//!
+//! - `sessions`: launch config, status, progress.
+//! - `queries`: what was asked (kind, step, abstract state, payload) and the answers given.
+//! - `episodes`: finished episodes' metrics.
+//! - `checkpoints`: where a session was, and the learner's digest.
+
+/// The current time as the RFC 3339 text every table stores (UTC, milliseconds), as a literal
+/// for `concat!`: sqlx takes only static SQL.
+macro_rules! now {
+    () => {
+        "strftime('%Y-%m-%dT%H:%M:%fZ', 'now')"
+    };
+}
+
+mod checkpoints;
+mod episodes;
+mod queries;
+mod sessions;
+
+use std::path::Path;
+use std::str::FromStr;
+use std::time::Duration;
+
+use sqlx::SqlitePool;
+use sqlx::sqlite::SqliteConnectOptions;
+
+pub use checkpoints::CheckpointRow;
+pub use episodes::EpisodeRow;
+pub use queries::{AnswerCounts, AnswerRow, CommitOutcome, QueryRow, SyntheticAnswer};
+pub use sessions::{NewSession, SessionRow, Status};
+
+/// The database file inside the data dir.
+pub const DB_FILE: &str = "dualrep.db";
+
+/// What a store call can fail with.
+pub type Result<T> = std::result::Result<T, sqlx::Error>;
+
+#[derive(Clone, Debug)]
+pub struct Store {
+    pool: SqlitePool,
+}
+
+impl Store {
+    /// Open (creating on first run) `<data_dir>/dualrep.db` and apply the migrations.
+    pub async fn open(data_dir: &Path) -> anyhow::Result<Self> {
+        std::fs::create_dir_all(data_dir)?;
+        let options = SqliteConnectOptions::from_str("sqlite://")?
+            .filename(data_dir.join(DB_FILE))
+            .create_if_missing(true)
+            .journal_mode(sqlx::sqlite::SqliteJournalMode::Wal)
+            .synchronous(sqlx::sqlite::SqliteSynchronous::Full)
+            .foreign_keys(true)
+            .busy_timeout(Duration::from_secs(10));
+        let pool = sqlx::sqlite::SqlitePoolOptions::new()
+            .max_connections(8)
+            .connect_with(options)
+            .await?;
+        let store = Self { pool };
+        store.migrate().await?;
+        Ok(store)
+    }
+
+    /// A store over an existing pool (`#[sqlx::test]` hands one in); migrations applied.
+    pub async fn from_pool(pool: SqlitePool) -> anyhow::Result<Self> {
+        let store = Self { pool };
+        store.migrate().await?;
+        Ok(store)
+    }
+
+    async fn migrate(&self) -> anyhow::Result<()> {
+        sqlx::migrate!("./migrations").run(&self.pool).await?;
+        Ok(())
+    }
+
+    pub fn pool(&self) -> &SqlitePool {
+        &self.pool
+    }
+
+    /// Whether the database answers (for `/healthz`).
+    pub async fn ping(&self) -> Result<()> {
+        sqlx::query("SELECT 1")
+            .execute(&self.pool)
+            .await
+            .map(|_| ())
+    }
+}

@@ -1,0 +1,220 @@
+//! The `sessions` table.
+
+use serde::Serialize;
+use sqlx::Row;
+use sqlx::sqlite::SqliteRow;
+
+use super::{Result, Store};
+
+/// A session's lifecycle state (`status` in the API and the table).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Status {
+    Queued,
+    Running,
+    /// Running, and waiting for a trainer's answer.
+    Waiting,
+    Finished,
+    Failed,
+    Stopped,
+    /// Cut off by a shutdown or crash; `POST .../resume` continues it.
+    Interrupted,
+}
+
+impl Status {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Status::Queued => "queued",
+            Status::Running => "running",
+            Status::Waiting => "waiting",
+            Status::Finished => "finished",
+            Status::Failed => "failed",
+            Status::Stopped => "stopped",
+            Status::Interrupted => "interrupted",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<Self> {
+        [
+            Status::Queued,
+            Status::Running,
+            Status::Waiting,
+            Status::Finished,
+            Status::Failed,
+            Status::Stopped,
+            Status::Interrupted,
+        ]
+        .into_iter()
+        .find(|x| x.as_str() == s)
+    }
+
+    /// Whether a session in this state has a live thread (or is about to).
+    pub fn is_active(self) -> bool {
+        matches!(self, Status::Queued | Status::Running | Status::Waiting)
+    }
+
+    /// Whether `POST .../resume` may continue it.
+    pub fn is_resumable(self) -> bool {
+        matches!(self, Status::Interrupted | Status::Stopped | Status::Failed)
+    }
+}
+
+/// One row of `sessions`.
+#[derive(Clone, Debug, Serialize)]
+pub struct SessionRow {
+    pub id: String,
+    pub task: String,
+    pub method: String,
+    pub trainer: String,
+    pub seed: i64,
+    pub budget: i64,
+    pub config: serde_json::Value,
+    #[serde(skip)]
+    pub trainer_token: String,
+    pub status: Status,
+    pub reason: Option<String>,
+    pub progress: i64,
+    pub latest: serde_json::Value,
+    pub created_at: String,
+    pub started_at: Option<String>,
+    pub ended_at: Option<String>,
+}
+
+fn json(text: &str) -> serde_json::Value {
+    serde_json::from_str(text).unwrap_or(serde_json::Value::Null)
+}
+
+impl SessionRow {
+    fn from_row(r: &SqliteRow) -> Self {
+        let status: String = r.get("status");
+        Self {
+            id: r.get("id"),
+            task: r.get("task"),
+            method: r.get("method"),
+            trainer: r.get("trainer"),
+            seed: r.get("seed"),
+            budget: r.get("budget"),
+            config: json(r.get("config")),
+            trainer_token: r.get("trainer_token"),
+            status: Status::parse(&status).unwrap_or(Status::Failed),
+            reason: r.get("reason"),
+            progress: r.get("progress"),
+            latest: json(r.get("latest")),
+            created_at: r.get("created_at"),
+            started_at: r.get("started_at"),
+            ended_at: r.get("ended_at"),
+        }
+    }
+}
+
+/// A new session's row.
+pub struct NewSession<'a> {
+    pub id: &'a str,
+    pub task: &'a str,
+    pub method: &'a str,
+    pub trainer: &'a str,
+    pub seed: u64,
+    pub budget: u64,
+    pub config: &'a serde_json::Value,
+    pub trainer_token: &'a str,
+}
+
+impl Store {
+    pub async fn insert_session(&self, s: NewSession<'_>) -> Result<SessionRow> {
+        sqlx::query(concat!(
+            "INSERT INTO sessions (id, task, method, trainer, seed, budget, config, trainer_token, status, created_at)
+             VALUES (?, ?, ?, ?, ?, ?, ?, ?, 'queued', ", now!(), ")"
+        ))
+        .bind(s.id)
+        .bind(s.task)
+        .bind(s.method)
+        .bind(s.trainer)
+        .bind(s.seed as i64)
+        .bind(s.budget as i64)
+        .bind(s.config.to_string())
+        .bind(s.trainer_token)
+        .execute(self.pool())
+        .await?;
+        self.session(s.id).await?.ok_or(sqlx::Error::RowNotFound)
+    }
+
+    pub async fn session(&self, id: &str) -> Result<Option<SessionRow>> {
+        let row = sqlx::query("SELECT * FROM sessions WHERE id = ?")
+            .bind(id)
+            .fetch_optional(self.pool())
+            .await?;
+        Ok(row.as_ref().map(SessionRow::from_row))
+    }
+
+    /// All sessions, newest first.
+    pub async fn sessions(&self) -> Result<Vec<SessionRow>> {
+        let rows = sqlx::query("SELECT * FROM sessions ORDER BY created_at DESC, id")
+            .fetch_all(self.pool())
+            .await?;
+        Ok(rows.iter().map(SessionRow::from_row).collect())
+    }
+
+    /// Set the status (and the reason for `failed`); terminal states stamp `ended_at`, a start
+    /// stamps `started_at` once.
+    pub async fn set_status(&self, id: &str, status: Status, reason: Option<&str>) -> Result<()> {
+        let sql = match status {
+            Status::Running => concat!(
+                "UPDATE sessions SET status = ?, reason = ?, started_at = COALESCE(started_at, ",
+                now!(),
+                "), ended_at = NULL WHERE id = ?"
+            ),
+            Status::Queued | Status::Waiting => {
+                "UPDATE sessions SET status = ?, reason = ? WHERE id = ?"
+            }
+            _ => concat!(
+                "UPDATE sessions SET status = ?, reason = ?, ended_at = ",
+                now!(),
+                " WHERE id = ?"
+            ),
+        };
+        sqlx::query(sql)
+            .bind(status.as_str())
+            .bind(reason)
+            .bind(id)
+            .execute(self.pool())
+            .await?;
+        Ok(())
+    }
+
+    pub async fn set_progress(
+        &self,
+        id: &str,
+        progress: u64,
+        latest: &serde_json::Value,
+    ) -> Result<()> {
+        sqlx::query("UPDATE sessions SET progress = ?, latest = ? WHERE id = ?")
+            .bind(progress as i64)
+            .bind(latest.to_string())
+            .bind(id)
+            .execute(self.pool())
+            .await?;
+        Ok(())
+    }
+
+    /// At start: sessions that were running when the server went away become `interrupted`
+    /// (resumable); queued ones stay queued and are started again. Returns both lists.
+    pub async fn recover_after_restart(&self) -> Result<(Vec<String>, Vec<String>)> {
+        let interrupted: Vec<String> = sqlx::query(
+            "UPDATE sessions SET status = 'interrupted', reason = 'the server stopped while it ran'
+             WHERE status IN ('running', 'waiting') RETURNING id",
+        )
+        .fetch_all(self.pool())
+        .await?
+        .iter()
+        .map(|r| r.get("id"))
+        .collect();
+        let queued =
+            sqlx::query("SELECT id FROM sessions WHERE status = 'queued' ORDER BY created_at")
+                .fetch_all(self.pool())
+                .await?
+                .iter()
+                .map(|r| r.get("id"))
+                .collect();
+        Ok((interrupted, queued))
+    }
+}

@@ -1,0 +1,258 @@
+//! The websocket protocol (`docs/protocol.md`): one serde-tagged enum each way. Client text is
+//! parsed once, here, into `ClientMessage`; anything else becomes a `ProtocolError` with a code
+//! the browser can act on. No IO.
+
+use serde::{Deserialize, Serialize};
+
+use crate::scene_graph::Predicate;
+use crate::session::{AnswerValue, Frame, QueryContent};
+use crate::sim::{Geometry, Task};
+use crate::store::Status;
+
+/// Server to trainer.
+#[derive(Clone, Debug, Serialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum ServerMessage {
+    /// First message on every connection.
+    Hello {
+        session: String,
+        task: Task,
+        method: String,
+        /// `evaluative` or `preference`: which answers this session takes.
+        kind: &'static str,
+        status: Status,
+        predicates: Vec<Predicate>,
+        /// The current episode's static scene (absent until the session has started).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        geometry: Option<Geometry>,
+        /// Steps (evaluative) or queries (preference) the session will take.
+        budget: u64,
+    },
+    Frame(Frame),
+    Query(QueryMessage),
+    /// The answer to `id` is stored.
+    Ack {
+        id: i64,
+        value: AnswerValue,
+    },
+    /// `id` needs no answer any more: `answered` (by another trainer), `expired`, or `ended`.
+    Withdrawn {
+        id: i64,
+        reason: &'static str,
+    },
+    Progress(ProgressMessage),
+    Error {
+        code: &'static str,
+        message: String,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        id: Option<i64>,
+    },
+    /// The session is over (or the server is shutting down); no more messages follow.
+    Ended {
+        status: Status,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        reason: Option<String>,
+    },
+}
+
+/// A query for the trainers.
+#[derive(Clone, Debug, Serialize)]
+pub struct QueryMessage {
+    pub id: i64,
+    /// 0-based order of the query in its session.
+    pub seq: u64,
+    /// The environment step (evaluative) or query number (preference) it was asked at.
+    pub step: u64,
+    pub abstract_state: u32,
+    /// Milliseconds left before it counts as "no feedback" (or a skipped pair).
+    pub expires_in_ms: u64,
+    #[serde(flatten)]
+    pub content: QueryContent,
+}
+
+/// Where the session stands.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct ProgressMessage {
+    /// Queries answered so far (by anyone, timeouts included).
+    pub answered: u64,
+    /// Steps or queries done, of `budget`.
+    pub progress: u64,
+    pub budget: u64,
+    /// `steps` or `queries`.
+    pub unit: &'static str,
+    /// Share of steps with feedback (evaluative sessions).
+    pub feedback_fraction: f64,
+    /// Returns of the latest finished episodes, oldest first (evaluative sessions).
+    pub recent_returns: Vec<f64>,
+    /// Posterior alignment with the synthetic trainer's reward (synthetic preference sessions).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub alignment: Option<f64>,
+}
+
+/// Trainer to server.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ClientMessage {
+    Answer { id: i64, value: AnswerValue },
+    Undo { id: i64 },
+}
+
+/// Why a client message was refused.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ProtocolError {
+    pub code: &'static str,
+    pub message: String,
+}
+
+impl ProtocolError {
+    pub fn new(code: &'static str, message: impl Into<String>) -> Self {
+        Self {
+            code,
+            message: message.into(),
+        }
+    }
+
+    pub fn to_message(&self, id: Option<i64>) -> ServerMessage {
+        ServerMessage::Error {
+            code: self.code,
+            message: self.message.clone(),
+            id,
+        }
+    }
+}
+
+/// Parse one text message from a trainer.
+pub fn parse_client(text: &str) -> Result<ClientMessage, ProtocolError> {
+    let value: serde_json::Value = serde_json::from_str(text)
+        .map_err(|e| ProtocolError::new("malformed_json", format!("not JSON: {e}")))?;
+    if !value.is_object() {
+        return Err(ProtocolError::new(
+            "bad_message",
+            "a message is a JSON object with a \"type\"",
+        ));
+    }
+    serde_json::from_value(value).map_err(|e| {
+        ProtocolError::new(
+            "bad_message",
+            format!(
+                "{e}; expected {{\"type\": \"answer\", \"id\": <query id>, \"value\": 1 | 0 | -1 | \"left\" | \"right\" | \"equal\" | \"skip\"}} or {{\"type\": \"undo\", \"id\": <query id>}}"
+            ),
+        )
+    })
+}
+
+/// The id a (possibly malformed) message names, to attach to its error.
+pub fn id_of(text: &str) -> Option<i64> {
+    serde_json::from_str::<serde_json::Value>(text)
+        .ok()?
+        .get("id")?
+        .as_i64()
+}
+
+impl ServerMessage {
+    pub fn to_text(&self) -> String {
+        serde_json::to_string(self).expect("server messages serialise")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::guidance::drpl::trainer::Preference;
+    use proptest::prelude::*;
+
+    #[test]
+    fn answers_parse_in_both_forms() {
+        assert_eq!(
+            parse_client(r#"{"type":"answer","id":7,"value":-1}"#).unwrap(),
+            ClientMessage::Answer {
+                id: 7,
+                value: AnswerValue::Evaluation(-1)
+            }
+        );
+        assert_eq!(
+            parse_client(r#"{"type":"answer","id":7,"value":"left"}"#).unwrap(),
+            ClientMessage::Answer {
+                id: 7,
+                value: AnswerValue::Preference(Preference::Left)
+            }
+        );
+        assert_eq!(
+            parse_client(r#"{"type":"undo","id":3}"#).unwrap(),
+            ClientMessage::Undo { id: 3 }
+        );
+    }
+
+    #[test]
+    fn bad_messages_get_codes() {
+        assert_eq!(parse_client("{").unwrap_err().code, "malformed_json");
+        assert_eq!(parse_client("[1]").unwrap_err().code, "bad_message");
+        assert_eq!(
+            parse_client(r#"{"type":"answer","id":"x","value":1}"#)
+                .unwrap_err()
+                .code,
+            "bad_message"
+        );
+        assert_eq!(
+            parse_client(r#"{"type":"answer","id":1,"value":"maybe"}"#)
+                .unwrap_err()
+                .code,
+            "bad_message"
+        );
+        assert_eq!(
+            parse_client(r#"{"type":"hack","id":1}"#).unwrap_err().code,
+            "bad_message"
+        );
+        assert_eq!(
+            parse_client(r#"{"type":"answer","id":1,"value":1,"x":2}"#)
+                .unwrap_err()
+                .code,
+            "bad_message"
+        );
+        assert_eq!(
+            id_of(r#"{"type":"answer","id":12,"value":"maybe"}"#),
+            Some(12)
+        );
+    }
+
+    #[test]
+    fn server_messages_are_tagged_snake_case() {
+        let m = ServerMessage::Withdrawn {
+            id: 4,
+            reason: "answered",
+        };
+        assert_eq!(
+            m.to_text(),
+            r#"{"type":"withdrawn","id":4,"reason":"answered"}"#
+        );
+        let e = ServerMessage::Ended {
+            status: Status::Finished,
+            reason: None,
+        };
+        assert_eq!(e.to_text(), r#"{"type":"ended","status":"finished"}"#);
+    }
+
+    proptest! {
+        // Whatever arrives, the parser answers with a message or an error; it never panics.
+        #[test]
+        fn the_parser_never_panics_on_text(text in ".{0,200}") {
+            let _ = parse_client(&text);
+            let _ = id_of(&text);
+        }
+
+        #[test]
+        fn the_parser_never_panics_on_json_shaped_text(
+            ty in prop::sample::select(vec!["answer", "undo", "hello", "", "ANSWER"]),
+            id in prop::option::of(any::<i64>()),
+            value in prop::sample::select(vec!["1", "0", "-1", "2", "1.5", "\"left\"", "\"skip\"", "null", "[]", "{}", "\"\"", "99999999999999999999"]),
+        ) {
+            let id = id.map_or("null".to_string(), |i| i.to_string());
+            let text = format!(r#"{{"type":"{ty}","id":{id},"value":{value}}}"#);
+            match parse_client(&text) {
+                Ok(ClientMessage::Answer { value, .. }) => prop_assert!(ty == "answer" && (value.as_evaluation().is_some() || value.as_preference().is_some() || matches!(value, AnswerValue::Evaluation(_)))),
+                Ok(ClientMessage::Undo { .. }) => prop_assert!(false, "undo takes no value"),
+                Err(e) => prop_assert!(e.code == "bad_message"),
+            }
+        }
+    }
+}

@@ -1,0 +1,339 @@
+//! The REST handlers through `app().oneshot(...)`: auth, launch validation, the error shape, the
+//! self-description, and a synthetic preference session from launch to export.
+
+mod support {
+    pub mod server;
+    pub mod trainer;
+}
+
+use std::time::{Duration, Instant};
+
+use axum::body::Body;
+use axum::http::{Request, StatusCode, header};
+use dualrep::http::{app, openapi};
+use http_body_util::BodyExt;
+use serde_json::{Value, json};
+use support::server::{TOKEN, state};
+use tower::ServiceExt;
+
+struct Reply {
+    status: StatusCode,
+    content_type: String,
+    body: Vec<u8>,
+}
+
+impl Reply {
+    fn json(&self) -> Value {
+        serde_json::from_slice(&self.body)
+            .unwrap_or_else(|e| panic!("not JSON ({e}): {}", String::from_utf8_lossy(&self.body)))
+    }
+
+    /// The JSON error shape with this status and code.
+    fn assert_error(&self, status: StatusCode, code: &str) {
+        assert_eq!(
+            self.status,
+            status,
+            "{}",
+            String::from_utf8_lossy(&self.body)
+        );
+        let v = self.json();
+        assert_eq!(v["error"]["code"], code, "{v}");
+        assert!(!v["error"]["message"].as_str().unwrap().is_empty());
+    }
+}
+
+async fn call(
+    router: &axum::Router,
+    method: &str,
+    uri: &str,
+    token: Option<&str>,
+    body: Option<&str>,
+) -> Reply {
+    let mut b = Request::builder().method(method).uri(uri);
+    if let Some(t) = token {
+        b = b.header(header::AUTHORIZATION, format!("Bearer {t}"));
+    }
+    if body.is_some() {
+        b = b.header(header::CONTENT_TYPE, "application/json");
+    }
+    let request = b.body(Body::from(body.unwrap_or("").to_string())).unwrap();
+    let response = router.clone().oneshot(request).await.unwrap();
+    let status = response.status();
+    let content_type = response
+        .headers()
+        .get(header::CONTENT_TYPE)
+        .map(|v| v.to_str().unwrap().to_string())
+        .unwrap_or_default();
+    let body = response
+        .into_body()
+        .collect()
+        .await
+        .unwrap()
+        .to_bytes()
+        .to_vec();
+    Reply {
+        status,
+        content_type,
+        body,
+    }
+}
+
+#[tokio::test]
+async fn researcher_routes_need_the_token_and_public_ones_do_not() {
+    let dir = tempfile::tempdir().unwrap();
+    let router = app(state(dir.path()).await);
+    call(&router, "GET", "/api/sessions", None, None)
+        .await
+        .assert_error(StatusCode::UNAUTHORIZED, "unauthorized");
+    call(&router, "GET", "/api/sessions", Some("wrong"), None)
+        .await
+        .assert_error(StatusCode::UNAUTHORIZED, "unauthorized");
+    let ok = call(&router, "GET", "/api/sessions", Some(TOKEN), None).await;
+    assert_eq!((ok.status, ok.json()), (StatusCode::OK, json!([])));
+    let health = call(&router, "GET", "/healthz", None, None).await;
+    assert_eq!(
+        (health.status, health.json()["status"].clone()),
+        (StatusCode::OK, json!("ok"))
+    );
+    let tasks = call(&router, "GET", "/api/tasks", None, None).await.json();
+    let placing = tasks["tasks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|t| t["id"] == "placing")
+        .unwrap();
+    assert!(
+        placing["predicates"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|p| p["label"].as_str().unwrap().contains("above hoop"))
+    );
+    call(&router, "GET", "/api/nothing-here", Some(TOKEN), None)
+        .await
+        .assert_error(StatusCode::NOT_FOUND, "not_found");
+    call(&router, "GET", "/api/sessions/nope", Some(TOKEN), None)
+        .await
+        .assert_error(StatusCode::NOT_FOUND, "not_found");
+}
+
+#[tokio::test]
+async fn bad_launch_requests_get_clear_errors_and_nothing_is_stored() {
+    let dir = tempfile::tempdir().unwrap();
+    let router = app(state(dir.path()).await);
+    let post = |body: &'static str| {
+        let router = router.clone();
+        async move { call(&router, "POST", "/api/sessions", Some(TOKEN), Some(body)).await }
+    };
+    post("{not json")
+        .await
+        .assert_error(StatusCode::BAD_REQUEST, "bad_request");
+    post(r#"{"task":"reaching","method":"dref","trainer":"human","seed":"one"}"#)
+        .await
+        .assert_error(StatusCode::BAD_REQUEST, "bad_request");
+    post(r#"{"task":"mars","method":"dref","trainer":"human"}"#)
+        .await
+        .assert_error(StatusCode::BAD_REQUEST, "bad_request");
+    post(r#"{"task":"reaching","method":"magic","trainer":"human"}"#)
+        .await
+        .assert_error(StatusCode::BAD_REQUEST, "bad_request");
+    post(r#"{"task":"reaching","method":"dref","trainer":"robot"}"#)
+        .await
+        .assert_error(StatusCode::BAD_REQUEST, "bad_request");
+    post(r#"{"task":"reaching","method":"dref","trainer":"human","colour":"red"}"#)
+        .await
+        .assert_error(StatusCode::BAD_REQUEST, "bad_request");
+    post(r#"{"task":"reaching","method":"drpl","trainer":"human","steps":5}"#)
+        .await
+        .assert_error(StatusCode::BAD_REQUEST, "bad_request");
+    let r = post(r#"{"task":"reaching","method":"dref","trainer":"human","steps":0}"#).await;
+    r.assert_error(StatusCode::UNPROCESSABLE_ENTITY, "invalid_session");
+    let r =
+        post(r#"{"task":"reaching","method":"dref","trainer":"human","params":{"hidden":"wide"}}"#)
+            .await;
+    r.assert_error(StatusCode::UNPROCESSABLE_ENTITY, "invalid_session");
+    assert!(
+        r.json()["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("hidden")
+    );
+    post(r#"{"task":"reaching","method":"dref","trainer":"human","params":{"pace_hz":0}}"#)
+        .await
+        .assert_error(StatusCode::UNPROCESSABLE_ENTITY, "invalid_session");
+    // Oversized bodies are refused before parsing.
+    let big = format!(
+        r#"{{"task":"reaching","method":"dref","trainer":"human","params":{{"x":"{}"}}}}"#,
+        "a".repeat(100_000)
+    );
+    call(&router, "POST", "/api/sessions", Some(TOKEN), Some(&big))
+        .await
+        .assert_error(StatusCode::PAYLOAD_TOO_LARGE, "payload_too_large");
+    let list = call(&router, "GET", "/api/sessions", Some(TOKEN), None).await;
+    assert_eq!(list.json(), json!([]));
+}
+
+#[tokio::test]
+async fn the_openapi_document_lists_exactly_the_routes() {
+    let doc = openapi::document();
+    let paths = doc["paths"].as_object().unwrap();
+    for (method, path) in openapi::OPERATIONS {
+        assert!(
+            paths.get(path).and_then(|p| p.get(method)).is_some(),
+            "{method} {path} undocumented"
+        );
+    }
+    let documented: usize = paths
+        .values()
+        .map(|p| {
+            p.as_object()
+                .unwrap()
+                .keys()
+                .filter(|k| *k != "parameters")
+                .count()
+        })
+        .sum();
+    assert_eq!(documented, openapi::OPERATIONS.len());
+    // Every documented route answers something other than the API's 404.
+    let dir = tempfile::tempdir().unwrap();
+    let router = app(state(dir.path()).await);
+    for (method, path) in openapi::OPERATIONS {
+        let uri = path.replace("{id}", "nosuch");
+        let r = call(&router, &method.to_uppercase(), &uri, Some(TOKEN), None).await;
+        let unrouted = r.status == StatusCode::NOT_FOUND
+            && r.json()["error"]["message"]
+                .as_str()
+                .unwrap()
+                .contains("no such API route");
+        assert!(!unrouted, "{method} {path} is documented but not routed");
+    }
+}
+
+#[tokio::test]
+async fn a_synthetic_drpl_session_runs_to_its_end_and_exports() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path()).await;
+    let router = app(st);
+    let r = call(
+        &router,
+        "POST",
+        "/api/sessions",
+        Some(TOKEN),
+        Some(r#"{"task":"reaching","method":"drpl","trainer":"synthetic","seed":2,"queries":6,"params":{"trajectories":12}}"#),
+    )
+    .await;
+    assert_eq!(
+        r.status,
+        StatusCode::CREATED,
+        "{}",
+        String::from_utf8_lossy(&r.body)
+    );
+    let created = r.json();
+    let id = created["id"].as_str().unwrap().to_string();
+    assert!(
+        created["trainer_url"]
+            .as_str()
+            .unwrap()
+            .starts_with(&format!("/train/{id}?token="))
+    );
+    let start = Instant::now();
+    let session = loop {
+        let s = call(
+            &router,
+            "GET",
+            &format!("/api/sessions/{id}"),
+            Some(TOKEN),
+            None,
+        )
+        .await
+        .json();
+        if s["status"] == "finished" || s["status"] == "failed" {
+            break s;
+        }
+        assert!(start.elapsed() < Duration::from_secs(60), "{s}");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    };
+    assert_eq!(session["status"], "finished", "{session}");
+    assert_eq!(session["progress"], 6);
+    assert_eq!(session["unit"], "queries");
+    assert_eq!(session["answers"]["total"], 6);
+    assert!(session["latest"]["alignment"].as_f64().unwrap() > -1.0);
+    let answers = call(
+        &router,
+        "GET",
+        &format!("/api/sessions/{id}/answers"),
+        Some(TOKEN),
+        None,
+    )
+    .await
+    .json();
+    let answers = answers.as_array().unwrap();
+    assert_eq!(answers.len(), 6);
+    for (i, a) in answers.iter().enumerate() {
+        assert_eq!(a["seq"], i);
+        assert_eq!(a["kind"], "preference");
+        assert_eq!(a["who"], "synthetic");
+        assert!(["left", "right", "equal", "skip"].contains(&a["value"].as_str().unwrap()));
+        for field in ["query_id", "step", "answered_at", "latency_ms"] {
+            assert!(!a[field].is_null(), "{field} missing in {a}");
+        }
+    }
+    let csv = call(
+        &router,
+        "GET",
+        &format!("/api/sessions/{id}/export?format=csv"),
+        Some(TOKEN),
+        None,
+    )
+    .await;
+    assert_eq!(csv.content_type, "text/csv");
+    let text = String::from_utf8(csv.body).unwrap();
+    assert_eq!(text.lines().count(), 7);
+    assert!(text.starts_with("query_id,seq,kind,step"));
+    let jsonl = call(
+        &router,
+        "GET",
+        &format!("/api/sessions/{id}/export?format=jsonl"),
+        Some(TOKEN),
+        None,
+    )
+    .await;
+    let records: Vec<Value> = String::from_utf8(jsonl.body)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(records[0]["record"], "session");
+    assert_eq!(
+        records.iter().filter(|r| r["record"] == "answer").count(),
+        6
+    );
+    call(
+        &router,
+        "GET",
+        &format!("/api/sessions/{id}/export?format=xml"),
+        Some(TOKEN),
+        None,
+    )
+    .await
+    .assert_error(StatusCode::BAD_REQUEST, "bad_request");
+    // A finished session cannot be stopped, and resumes only from interrupted/stopped/failed.
+    call(
+        &router,
+        "POST",
+        &format!("/api/sessions/{id}/stop"),
+        Some(TOKEN),
+        None,
+    )
+    .await
+    .assert_error(StatusCode::CONFLICT, "conflict");
+    call(
+        &router,
+        "POST",
+        &format!("/api/sessions/{id}/resume"),
+        Some(TOKEN),
+        None,
+    )
+    .await
+    .assert_error(StatusCode::CONFLICT, "conflict");
+}

@@ -1,0 +1,170 @@
+//! The store against a real SQLite database per test (`#[sqlx::test]` applies `migrations/`).
+
+use dualrep::guidance::drpl::trainer::Preference;
+use dualrep::guidance::evaluative_run::EpisodeRecord;
+use dualrep::session::AnswerValue;
+use dualrep::sim::Outcome;
+use dualrep::store::{CommitOutcome, NewSession, Status, Store, SyntheticAnswer};
+use sqlx::SqlitePool;
+
+async fn store_with_session(pool: SqlitePool, id: &str) -> Store {
+    let store = Store::from_pool(pool).await.unwrap();
+    store
+        .insert_session(NewSession {
+            id,
+            task: "reaching",
+            method: "dref",
+            trainer: "human",
+            seed: 3,
+            budget: 100,
+            config: &serde_json::json!({"task": "reaching"}),
+            trainer_token: "tok",
+        })
+        .await
+        .unwrap();
+    store
+}
+
+#[sqlx::test]
+async fn the_first_committed_answer_wins_and_repeats_are_idempotent(pool: SqlitePool) {
+    let store = store_with_session(pool, "s1").await;
+    let q = store
+        .upsert_query("s1", 0, "evaluative", 17, 5, "{}")
+        .await
+        .unwrap();
+    let good = AnswerValue::Evaluation(1);
+    assert_eq!(
+        store
+            .commit_answer(q, "s1", good, "trainer", 120)
+            .await
+            .unwrap(),
+        CommitOutcome::Committed
+    );
+    assert_eq!(
+        store
+            .commit_answer(q, "s1", good, "trainer", 130)
+            .await
+            .unwrap(),
+        CommitOutcome::AlreadyAnswered(good)
+    );
+    assert_eq!(
+        store
+            .commit_answer(q, "s1", AnswerValue::Evaluation(-1), "timeout", 0)
+            .await
+            .unwrap(),
+        CommitOutcome::AlreadyAnswered(good)
+    );
+    let answers = store.answers("s1").await.unwrap();
+    assert_eq!(answers.len(), 1);
+    assert_eq!(
+        (answers[0].step, answers[0].value, answers[0].latency_ms),
+        (17, good, 120)
+    );
+    assert_eq!(answers[0].who, "trainer");
+}
+
+#[sqlx::test]
+async fn a_re_asked_query_keeps_its_id_and_replay_stops_at_the_first_gap(pool: SqlitePool) {
+    let store = store_with_session(pool, "s1").await;
+    let a = store
+        .upsert_query("s1", 0, "preference", 0, 0, "{}")
+        .await
+        .unwrap();
+    let b = store
+        .upsert_query("s1", 1, "preference", 1, 0, "{}")
+        .await
+        .unwrap();
+    assert_eq!(
+        store
+            .upsert_query("s1", 1, "preference", 1, 0, "{}")
+            .await
+            .unwrap(),
+        b
+    );
+    let c = store
+        .upsert_query("s1", 2, "preference", 2, 0, "{}")
+        .await
+        .unwrap();
+    for (q, v) in [(a, Preference::Left), (c, Preference::Skip)] {
+        store
+            .commit_answer(q, "s1", AnswerValue::Preference(v), "trainer", 5)
+            .await
+            .unwrap();
+    }
+    // Query 1 is unanswered: the replay holds query 0 only, and query 1 is asked again.
+    assert_eq!(
+        store.replay_answers("s1").await.unwrap(),
+        vec![AnswerValue::Preference(Preference::Left)]
+    );
+    let counts = store.answer_counts("s1").await.unwrap();
+    assert_eq!(
+        (counts.total, counts.by_trainer, counts.no_feedback),
+        (2, 2, 1)
+    );
+}
+
+#[sqlx::test]
+async fn synthetic_batches_store_queries_with_answers_once(pool: SqlitePool) {
+    let store = store_with_session(pool, "s1").await;
+    let batch: Vec<SyntheticAnswer> = (0..5)
+        .map(|i| SyntheticAnswer {
+            seq: i,
+            kind: "evaluative",
+            step: i * 10,
+            abstract_state: 1,
+            value: AnswerValue::Evaluation(if i % 2 == 0 { 1 } else { -1 }),
+        })
+        .collect();
+    store.insert_synthetic("s1", &batch).await.unwrap();
+    // A resumed synthetic session replays the same answers: nothing is duplicated.
+    store.insert_synthetic("s1", &batch).await.unwrap();
+    let answers = store.answers("s1").await.unwrap();
+    assert_eq!(answers.len(), 5);
+    assert!(answers.iter().all(|a| a.who == "synthetic"));
+    assert_eq!(store.replay_answers("s1").await.unwrap().len(), 5);
+}
+
+#[sqlx::test]
+async fn status_episodes_checkpoints_and_recovery(pool: SqlitePool) {
+    let store = store_with_session(pool, "s1").await;
+    store.set_status("s1", Status::Running, None).await.unwrap();
+    let row = store.session("s1").await.unwrap().unwrap();
+    assert_eq!(row.status, Status::Running);
+    assert!(row.started_at.is_some() && row.ended_at.is_none());
+    let e = EpisodeRecord {
+        step: 40,
+        episode: 0,
+        episode_return: -3.5,
+        length: 40,
+        cumulative_return: -3.5,
+        feedback_count: 4,
+        feedback_fraction: 0.1,
+        outcome: Outcome::Success,
+    };
+    store.insert_episode("s1", &e).await.unwrap();
+    store.insert_episode("s1", &e).await.unwrap();
+    let episodes = store.episodes("s1").await.unwrap();
+    assert_eq!(episodes.len(), 1);
+    assert_eq!(
+        (episodes[0].episode_return, episodes[0].outcome.as_str()),
+        (-3.5, "success")
+    );
+    store
+        .insert_checkpoint("s1", 40, 4, "abc", Some("checkpoints/s1.safetensors"))
+        .await
+        .unwrap();
+    store
+        .insert_checkpoint("s1", 80, 9, "def", None)
+        .await
+        .unwrap();
+    assert_eq!(
+        store.latest_checkpoint("s1").await.unwrap().unwrap().digest,
+        "def"
+    );
+    // A crash leaves it running: the next start calls it interrupted.
+    let (interrupted, queued) = store.recover_after_restart().await.unwrap();
+    assert_eq!((interrupted, queued.len()), (vec!["s1".to_string()], 0));
+    let row = store.session("s1").await.unwrap().unwrap();
+    assert_eq!(row.status, Status::Interrupted);
+    assert!(row.reason.unwrap().contains("stopped"));
+}

@@ -1,0 +1,116 @@
+//! A server for tests: the router over a fresh data dir (for `oneshot`), or the whole server
+//! started in-process on port 0 (for websocket clients).
+
+#![allow(dead_code)]
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use dualrep::cli::serve::{Running, ServeArgs, start};
+use dualrep::http::AppState;
+use dualrep::hub::{Hub, HubConfig};
+use dualrep::store::Store;
+use serde_json::Value;
+
+pub const TOKEN: &str = "researcher-test-token";
+
+/// Where the tests run from: the crate root, whose `web/` and `models/` the server uses.
+pub fn root() -> std::path::PathBuf {
+    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+pub async fn state(dir: &std::path::Path) -> AppState {
+    let store = Store::open(dir).await.unwrap();
+    let hub = Hub::new(
+        store.clone(),
+        HubConfig {
+            data_dir: dir.to_path_buf(),
+            models_dir: root().join("models"),
+            max_running: 4,
+        },
+    );
+    AppState {
+        store,
+        hub,
+        token: Arc::from(TOKEN),
+        web_dir: root().join("web"),
+        data_dir: dir.to_path_buf(),
+        cors_origins: vec![],
+    }
+}
+
+pub async fn serve(dir: &std::path::Path) -> Running {
+    start(ServeArgs {
+        addr: "127.0.0.1:0".parse().unwrap(),
+        data_dir: dir.to_path_buf(),
+        token: Some(TOKEN.into()),
+        max_sessions: Some(4),
+        web_dir: root().join("web"),
+        models_dir: root().join("models"),
+        cors_origins: vec![],
+        shutdown_grace_s: 30.0,
+    })
+    .await
+    .unwrap()
+}
+
+/// A REST client with the researcher token.
+pub struct Api {
+    pub base: String,
+    pub http: reqwest::Client,
+}
+
+impl Api {
+    pub fn new(addr: std::net::SocketAddr) -> Self {
+        Self {
+            base: format!("http://{addr}"),
+            http: reqwest::Client::new(),
+        }
+    }
+
+    pub async fn get(&self, path: &str) -> Value {
+        let r = self
+            .http
+            .get(format!("{}{path}", self.base))
+            .bearer_auth(TOKEN)
+            .send()
+            .await
+            .unwrap();
+        assert!(r.status().is_success(), "GET {path}: {}", r.status());
+        r.json().await.unwrap()
+    }
+
+    pub async fn post(&self, path: &str, body: Value) -> (u16, Value) {
+        let r = self
+            .http
+            .post(format!("{}{path}", self.base))
+            .bearer_auth(TOKEN)
+            .json(&body)
+            .send()
+            .await
+            .unwrap();
+        let status = r.status().as_u16();
+        (status, r.json().await.unwrap_or(Value::Null))
+    }
+
+    /// Poll a session until `done(session)` or panic after `timeout`.
+    pub async fn wait_for(
+        &self,
+        id: &str,
+        timeout: Duration,
+        done: impl Fn(&Value) -> bool,
+    ) -> Value {
+        let start = Instant::now();
+        loop {
+            let s = self.get(&format!("/api/sessions/{id}")).await;
+            if done(&s) {
+                return s;
+            }
+            assert!(
+                start.elapsed() < timeout,
+                "session {id} did not get there in {timeout:?}: {s}"
+            );
+            tokio::time::sleep(Duration::from_millis(50)).await;
+        }
+    }
+}

@@ -1,0 +1,288 @@
+//! Real websocket trainers against the server on port 0: a human DREF session and a human DRPL
+//! session driven to their end; several trainers on one query; reconnecting; bad input.
+
+mod support {
+    pub mod server;
+    pub mod trainer;
+}
+
+use std::collections::HashMap;
+use std::time::Duration;
+
+use serde_json::{Value, json};
+use support::server::{Api, serve};
+use support::trainer::{Trainer, token_of};
+
+const WAIT: Duration = Duration::from_secs(60);
+
+async fn launch(api: &Api, body: Value) -> (String, String) {
+    let (status, r) = api.post("/api/sessions", body).await;
+    assert_eq!(status, 201, "{r}");
+    (
+        r["id"].as_str().unwrap().to_string(),
+        token_of(r["trainer_url"].as_str().unwrap()),
+    )
+}
+
+/// Answer every query until `ended`; returns the acknowledged `(query id -> value)`.
+async fn answer_all(
+    t: &mut Trainer,
+    pick: impl Fn(&Value) -> Value,
+) -> (HashMap<i64, Value>, Value) {
+    let mut acked = HashMap::new();
+    let mut frames = 0;
+    loop {
+        let m = t
+            .next(WAIT)
+            .await
+            .expect("the socket stays open until ended");
+        match m["type"].as_str().unwrap() {
+            "query" => {
+                let v = pick(&m);
+                t.answer(m["id"].as_i64().unwrap(), v).await;
+            }
+            "ack" => {
+                acked.insert(m["id"].as_i64().unwrap(), m["value"].clone());
+            }
+            "frame" => frames += 1,
+            "error" => panic!("unexpected error {m}"),
+            "ended" => {
+                assert_eq!(m["status"], "finished", "{m}");
+                return (acked, json!({"frames": frames}));
+            }
+            _ => {}
+        }
+    }
+}
+
+async fn stored_answers(api: &Api, id: &str) -> HashMap<i64, Value> {
+    api.get(&format!("/api/sessions/{id}/answers"))
+        .await
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| (a["query_id"].as_i64().unwrap(), a["value"].clone()))
+        .collect()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_human_dref_session_runs_to_its_end_with_every_answer_stored() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = serve(dir.path()).await;
+    let api = Api::new(server.addr);
+    let (id, token) = launch(
+        &api,
+        json!({"task": "reaching", "method": "dref", "trainer": "human", "seed": 1, "steps": 150,
+               "params": {"pace_hz": 40, "hidden": [32, 32], "batch_size": 32, "answer_timeout_s": 30}}),
+    )
+    .await;
+    let mut t = Trainer::connect(server.addr, &id, &token).await;
+    let hello = t.next(WAIT).await.unwrap();
+    assert_eq!(
+        (hello["type"].as_str(), hello["kind"].as_str()),
+        (Some("hello"), Some("evaluative"))
+    );
+    assert!(!hello["predicates"].as_array().unwrap().is_empty());
+    let (acked, seen) = answer_all(&mut t, |q| {
+        assert_eq!(q["kind"], "evaluative");
+        assert!(!q["clip"]["frames"].as_array().unwrap().is_empty());
+        assert_eq!(q["action"].as_array().unwrap().len(), 2);
+        json!(if q["step"].as_u64().unwrap() % 2 == 0 {
+            1
+        } else {
+            -1
+        })
+    })
+    .await;
+    assert!(!acked.is_empty(), "DREF asks at its first step");
+    assert!(
+        seen["frames"].as_u64().unwrap() > 0,
+        "a human session streams frames"
+    );
+    let stored = stored_answers(&api, &id).await;
+    assert_eq!(
+        stored, acked,
+        "every acknowledged answer is stored, and nothing else"
+    );
+    let s = api.get(&format!("/api/sessions/{id}")).await;
+    assert_eq!(
+        (s["status"].as_str(), s["progress"].as_u64()),
+        (Some("finished"), Some(150))
+    );
+    assert_eq!(
+        s["answers"]["by_trainer"].as_u64(),
+        Some(acked.len() as u64)
+    );
+    // Episodes end by success, failure or time limit; 150 steps may hold none of them.
+    assert!(
+        api.get(&format!("/api/sessions/{id}/episodes"))
+            .await
+            .is_array()
+    );
+    // After the end, answers get a clear error and the socket stays usable.
+    let any = *acked.keys().next().unwrap();
+    t.answer(any, json!(1)).await;
+    let e = t.next_of(&["error"], WAIT).await;
+    assert_eq!(
+        (e["code"].as_str(), e["id"].as_i64()),
+        (Some("session_ended"), Some(any))
+    );
+    t.close().await;
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_human_drpl_session_runs_to_its_end() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = serve(dir.path()).await;
+    let api = Api::new(server.addr);
+    let (id, token) = launch(
+        &api,
+        json!({"task": "placing", "method": "drpl", "trainer": "human", "seed": 4, "queries": 4,
+               "params": {"trajectories": 10}}),
+    )
+    .await;
+    let mut t = Trainer::connect(server.addr, &id, &token).await;
+    let values = ["left", "right", "equal", "skip"];
+    let (acked, _) = answer_all(&mut t, |q| {
+        assert_eq!(q["kind"], "preference");
+        assert!(!q["left"]["frames"].as_array().unwrap().is_empty());
+        assert!(!q["right"]["frames"].as_array().unwrap().is_empty());
+        assert!(
+            q["predicate"]["label"].is_string(),
+            "DRPL names the predicate: {}",
+            q["predicate"]
+        );
+        json!(values[q["seq"].as_u64().unwrap() as usize % 4])
+    })
+    .await;
+    assert_eq!(acked.len(), 4);
+    assert_eq!(stored_answers(&api, &id).await, acked);
+    let s = api.get(&format!("/api/sessions/{id}")).await;
+    assert_eq!(
+        (s["status"].as_str(), s["answers"]["no_feedback"].as_u64()),
+        (Some("finished"), Some(1))
+    );
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_first_answer_wins_a_reconnect_gets_the_query_again_and_bad_input_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = serve(dir.path()).await;
+    let api = Api::new(server.addr);
+    let (id, token) = launch(
+        &api,
+        json!({"task": "reaching", "method": "ef-100", "trainer": "human", "seed": 0, "steps": 50,
+               "params": {"pace_hz": 100, "hidden": [32, 32], "batch_size": 32}}),
+    )
+    .await;
+    let (other_id, other_token) = launch(
+        &api,
+        json!({"task": "reaching", "method": "ef-100", "trainer": "human", "seed": 1, "steps": 50,
+               "params": {"pace_hz": 100, "hidden": [32, 32], "batch_size": 32}}),
+    )
+    .await;
+    // Tokens are per session; the researcher token may watch.
+    let refused = reqwest::get(format!(
+        "http://{}/ws/sessions/{id}?token={other_token}",
+        server.addr
+    ))
+    .await
+    .unwrap();
+    assert_eq!(refused.status(), 403);
+    let refused = reqwest::get(format!("http://{}/ws/sessions/{id}", server.addr))
+        .await
+        .unwrap();
+    assert_eq!(refused.status(), 401);
+
+    let mut a = Trainer::connect(server.addr, &id, &token).await;
+    let mut b = Trainer::connect(server.addr, &id, &token).await;
+    let q = a.next_of(&["query"], WAIT).await;
+    let qid = q["id"].as_i64().unwrap();
+    let qb = b.next_of(&["query"], WAIT).await;
+    assert_eq!(qb["id"].as_i64(), Some(qid), "every trainer sees the query");
+
+    // A reconnecting browser gets the pending query again.
+    b.close().await;
+    let mut b = Trainer::connect(server.addr, &id, &token).await;
+    let again = b.next_of(&["query"], WAIT).await;
+    assert_eq!(again["id"].as_i64(), Some(qid));
+
+    // Bad input: each gets an error with a code, and the socket keeps working.
+    for (text, code) in [
+        ("{oops", "malformed_json"),
+        (r#"{"type":"answer","id":"x","value":1}"#, "bad_message"),
+        (
+            r#"{"type":"answer","id":999999,"value":1}"#,
+            "unknown_query",
+        ),
+        (r#"{"type":"shout"}"#, "bad_message"),
+    ] {
+        a.send_text(text).await;
+        let e = a.next_of(&["error"], WAIT).await;
+        assert_eq!(e["code"].as_str(), Some(code), "{text} -> {e}");
+    }
+    a.answer(qid, json!("left")).await;
+    assert_eq!(a.next_of(&["error"], WAIT).await["code"], "bad_value");
+    a.answer(-5, json!(1)).await;
+    assert_eq!(a.next_of(&["error"], WAIT).await["code"], "unknown_query");
+
+    // The first committed answer wins; the other trainer sees it withdrawn, a repeat is idempotent.
+    a.answer(qid, json!(1)).await;
+    let ack = a.next_of(&["ack"], WAIT).await;
+    assert_eq!(
+        (ack["id"].as_i64(), ack["value"].as_i64()),
+        (Some(qid), Some(1))
+    );
+    let w = b.next_of(&["withdrawn"], WAIT).await;
+    assert_eq!(
+        (w["id"].as_i64(), w["reason"].as_str()),
+        (Some(qid), Some("answered"))
+    );
+    b.answer(qid, json!(1)).await;
+    assert_eq!(b.next_of(&["ack", "error"], WAIT).await["type"], "ack");
+    b.answer(qid, json!(-1)).await;
+    assert_eq!(
+        b.next_of(&["error"], WAIT).await["code"],
+        "already_answered"
+    );
+
+    // A query of another session is foreign here.
+    let mut o = Trainer::connect(server.addr, &other_id, &other_token).await;
+    let foreign = o.next_of(&["query"], WAIT).await["id"].as_i64().unwrap();
+    a.answer(foreign, json!(1)).await;
+    assert_eq!(a.next_of(&["error"], WAIT).await["code"], "unknown_query");
+
+    // An oversized message closes that socket only; the server keeps serving.
+    a.send_text(&format!(
+        r#"{{"type":"answer","id":1,"value":"{}"}}"#,
+        "x".repeat(10_000)
+    ))
+    .await;
+    let closed = loop {
+        match a.next(WAIT).await {
+            None => break true,
+            Some(m)
+                if m["type"] == "frame"
+                    || m["type"] == "progress"
+                    || m["type"] == "query"
+                    || m["type"] == "withdrawn" =>
+            {
+                continue;
+            }
+            Some(m) => panic!("unexpected {m}"),
+        }
+    };
+    assert!(closed);
+    let health = reqwest::get(format!("http://{}/healthz", server.addr))
+        .await
+        .unwrap();
+    assert_eq!(health.status(), 200);
+    let q2 = b.next_of(&["query"], WAIT).await;
+    b.answer(q2["id"].as_i64().unwrap(), json!(0)).await;
+    assert_eq!(b.next_of(&["ack"], WAIT).await["id"], q2["id"]);
+    o.close().await;
+    b.close().await;
+    server.shutdown().await.unwrap();
+}
