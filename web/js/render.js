@@ -469,11 +469,10 @@ export function describeAction(task, action) {
   const pct = (v) => `${Math.round(Math.abs(v) * 100)}%`;
   if (task === "lunar-lander") {
     const parts = [];
-    parts.push(a[0] > 0 ? `main engine ${pct((a[0] + 1) / 2)}` : "main engine off");
-    if (a[1] < -0.5) parts.push(`left engine ${pct(a[1])}`);
-    else if (a[1] > 0.5) parts.push(`right engine ${pct(a[1])}`);
-    else parts.push("side engines off");
-    return parts.join(", ");
+    if (a[0] > 0) parts.push(`the main engine at ${pct((a[0] + 1) / 2)}`);
+    if (a[1] < -0.5) parts.push(`the left engine at ${pct(a[1])}`);
+    else if (a[1] > 0.5) parts.push(`the right engine at ${pct(a[1])}`);
+    return parts.length ? `fires ${parts.join(" and ")}` : "fires no engine";
   }
   const dir = (v, pos, neg) => (Math.abs(v) < 0.05 ? "" : `${v > 0 ? pos : neg} ${pct(v)}`);
   const parts = [dir(a[0], "right", "left"), dir(a[1], "away", "toward you")];

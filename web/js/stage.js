@@ -4,7 +4,7 @@
 import { viewAspect, viewsFor } from "./render.js";
 
 /** Fill `container` with canvases for `geometry`'s views; returns `[{canvas, view}]`. */
-export function buildStage(container, geometry) {
+export function buildStage(container, geometry, { maxHeight = "58vh" } = {}) {
   container.replaceChildren();
   if (!geometry) return [];
   return viewsFor(geometry.task).map((view) => {
@@ -12,7 +12,11 @@ export function buildStage(container, geometry) {
     wrap.className = "view";
     const canvas = document.createElement("canvas");
     canvas.dataset.view = view;
-    canvas.style.aspectRatio = String(viewAspect(geometry, view));
+    const ratio = viewAspect(geometry, view);
+    canvas.style.aspectRatio = String(ratio);
+    // As wide as the column allows, but never taller than `maxHeight` (keeping the ratio).
+    canvas.style.width = `min(100%, calc(${maxHeight} * ${ratio.toFixed(4)}))`;
+    canvas.style.margin = "0 auto";
     canvas.setAttribute("role", "img");
     canvas.setAttribute("aria-label", `${geometry.task} ${view === "top" ? "from above" : "from the side"}`);
     wrap.append(canvas);

@@ -114,8 +114,8 @@ function showQuery(msg) {
     $("prompt").textContent = "Was that good? Watch the clip: the arrow is what the robot did.";
   } else {
     const panes = [
-      { clip: msg.left, canvases: buildStage($("left-stage"), msg.left.geometry) },
-      { clip: msg.right, canvases: buildStage($("right-stage"), msg.right.geometry) },
+      { clip: msg.left, canvases: buildStage($("left-stage"), msg.left.geometry, { maxHeight: msg.left.geometry.task === "placing" ? "27vh" : "50vh" }) },
+      { clip: msg.right, canvases: buildStage($("right-stage"), msg.right.geometry, { maxHeight: msg.right.geometry.task === "placing" ? "27vh" : "50vh" }) },
     ];
     page.loop = new ClipLoop(panes, { fps });
     chips($("left-holding"), msg.left_holding ?? []);
@@ -259,6 +259,7 @@ function showEnd(msg) {
   $("prompt").textContent = words[msg.status] ?? `The session ended (${msg.status}).`;
   if (msg.reason) $("prompt").textContent += ` ${msg.reason}`;
   setState("ended");
+  $("live").classList.add("hidden");
   if (page.hello && page.acked.size + page.history.length > 0) {
     const seconds = page.firstQueryAt && page.lastAnswerAt ? Math.round((page.lastAnswerAt - page.firstQueryAt) / 1000) : 0;
     $("summary").textContent = `You answered ${page.acked.size} question${page.acked.size === 1 ? "" : "s"} over ${seconds} s on this page, ${page.noFeedback} of them without feedback. Three quick questions, 1 to 5:`;
@@ -352,7 +353,7 @@ function onSocketState(state, info) {
   else if (state === "reconnecting") {
     setPill(pill, info.inMs ? `reconnecting in ${Math.ceil(info.inMs / 1000)} s` : "reconnecting…", "reconnecting");
     document.body.dataset.connection = "reconnecting";
-  } else if (state === "closed") setPill(pill, "closed", "offline");
+  } else if (state === "closed") setPill(pill, page.ended ? "done" : "closed", "offline");
   if (state === "connected") document.body.dataset.connection = "connected";
   if (state === "closed" && !page.ended) {
     $("prompt").textContent = "The connection was refused. Check the link you were given.";
