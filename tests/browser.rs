@@ -60,7 +60,11 @@ fn node_modules() {
     if dir.join("node_modules/playwright-core").is_dir() {
         return;
     }
-    let sub = if dir.join("package-lock.json").is_file() { "ci" } else { "install" };
+    let sub = if dir.join("package-lock.json").is_file() {
+        "ci"
+    } else {
+        "install"
+    };
     let status = Command::new("npm")
         .args([sub, "--no-audit", "--no-fund"])
         .current_dir(&dir)
@@ -73,7 +77,8 @@ fn artifacts() -> PathBuf {
     if let Ok(dir) = std::env::var("DUALREP_ARTIFACTS") {
         return PathBuf::from(dir);
     }
-    let target = std::env::var("CARGO_TARGET_DIR").map_or_else(|_| root().join("target"), PathBuf::from);
+    let target =
+        std::env::var("CARGO_TARGET_DIR").map_or_else(|_| root().join("target"), PathBuf::from);
     target.join("browser-artifacts")
 }
 
@@ -88,7 +93,14 @@ impl Server {
     fn start() -> Server {
         let data = tempfile::tempdir().expect("a temp dir");
         let mut child = Command::new(env!("CARGO_BIN_EXE_dualrep"))
-            .args(["serve", "--addr", "127.0.0.1:0", "--token", TOKEN, "--data-dir"])
+            .args([
+                "serve",
+                "--addr",
+                "127.0.0.1:0",
+                "--token",
+                TOKEN,
+                "--data-dir",
+            ])
             .arg(data.path())
             .current_dir(root())
             .stdout(Stdio::piped())
@@ -101,19 +113,32 @@ impl Server {
             let mut sent = false;
             for line in BufReader::new(stdout).lines().map_while(Result::ok) {
                 if !sent && let Some(rest) = line.split("listening on ").nth(1) {
-                    let url = rest.split_whitespace().next().unwrap_or_default().to_string();
+                    let url = rest
+                        .split_whitespace()
+                        .next()
+                        .unwrap_or_default()
+                        .to_string();
                     let _ = tx.send(url);
                     sent = true;
                 }
                 println!("[serve] {line}");
             }
         });
-        let url = rx.recv_timeout(Duration::from_secs(60)).unwrap_or_else(|_| {
-            let _ = child.kill();
-            panic!("dualrep serve did not print \"listening on http://ADDR\" within 60 s")
-        });
-        assert!(url.starts_with("http://"), "unexpected listening line: {url}");
-        Server { child, url, _data: data }
+        let url = rx
+            .recv_timeout(Duration::from_secs(60))
+            .unwrap_or_else(|_| {
+                let _ = child.kill();
+                panic!("dualrep serve did not print \"listening on http://ADDR\" within 60 s")
+            });
+        assert!(
+            url.starts_with("http://"),
+            "unexpected listening line: {url}"
+        );
+        Server {
+            child,
+            url,
+            _data: data,
+        }
     }
 }
 
