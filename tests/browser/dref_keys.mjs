@@ -1,7 +1,7 @@
 // Launch a human DREF session on Reaching from the dashboard, answer its queries in the trainer
 // page with the keys (up, space, down), and find the answers in /api/sessions/{id}/answers.
 
-import { api, check, nextQueryId, newPage, run, shot, waitFor } from "./lib.mjs";
+import { api, check, nextQueryId, newPage, run, shot } from "./lib.mjs";
 
 await run("dref_keys", async (browser) => {
   const page = await newPage(browser, { token: null });
@@ -72,5 +72,4 @@ await run("dref_keys", async (browser) => {
   await page.waitForSelector(`#sessions tr[data-id="${id}"] .pill.stopped`, { timeout: 15_000 });
   trainer.assertNoErrors();
   page.assertNoErrors();
-  void waitFor;
 });
