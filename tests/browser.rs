@@ -1,0 +1,215 @@
+//! Browser tests of the web UI: the real `dualrep serve` binary, Debian's Chromium driven by
+//! `playwright-core` from plain Node scripts in `tests/browser/`. Each test starts its own server
+//! on a free port with a fresh data dir and runs one script; screenshots land in
+//! `$DUALREP_ARTIFACTS` (default `<target dir>/browser-artifacts`).
+//!
+//! Needs `chromium`, `node` and `npm` (`apt-get install -y chromium nodejs npm`; `.ci/run`
+//! installs them). `DUALREP_SKIP_BROWSER=1` skips these tests, loudly; without it a missing
+//! browser is a failure.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+/// One browser test at a time: each runs a server, a session and a Chromium.
+static SERIAL: Mutex<()> = Mutex::new(());
+
+const TOKEN: &str = "browser-test-token";
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn which(program: &str) -> Option<PathBuf> {
+    let out = Command::new("which").arg(program).output().ok()?;
+    if !out.status.success() {
+        return None;
+    }
+    let path = String::from_utf8_lossy(&out.stdout).trim().to_string();
+    (!path.is_empty()).then(|| PathBuf::from(path))
+}
+
+/// Chromium's path, or `None` when the tests are to be skipped.
+fn chromium() -> Option<PathBuf> {
+    let skip = std::env::var("DUALREP_SKIP_BROWSER").is_ok_and(|v| v == "1");
+    let found = (which("chromium"), which("node"), which("npm"));
+    match found {
+        (Some(chromium), Some(_), Some(_)) => Some(chromium),
+        _ if skip => {
+            eprintln!(
+                "\n!!!!!!!! BROWSER TESTS SKIPPED (DUALREP_SKIP_BROWSER=1): the web UI is NOT tested !!!!!!!!\n"
+            );
+            None
+        }
+        (c, n, p) => panic!(
+            "the browser tests need Debian's chromium, node and npm (found: chromium {}, node {}, npm {}).\n\
+             Install them with `sudo apt-get install -y chromium nodejs npm` (.ci/run does this),\n\
+             or set DUALREP_SKIP_BROWSER=1 to skip these tests.",
+            c.is_some(),
+            n.is_some(),
+            p.is_some()
+        ),
+    }
+}
+
+/// `npm ci` (or `npm install` without a lock file) when `node_modules` is missing.
+fn node_modules() {
+    let dir = root().join("tests/browser");
+    if dir.join("node_modules/playwright-core").is_dir() {
+        return;
+    }
+    let sub = if dir.join("package-lock.json").is_file() {
+        "ci"
+    } else {
+        "install"
+    };
+    let status = Command::new("npm")
+        .args([sub, "--no-audit", "--no-fund"])
+        .current_dir(&dir)
+        .status()
+        .expect("running npm");
+    assert!(status.success(), "`npm {sub}` in tests/browser failed");
+}
+
+fn artifacts() -> PathBuf {
+    if let Ok(dir) = std::env::var("DUALREP_ARTIFACTS") {
+        return PathBuf::from(dir);
+    }
+    let target =
+        std::env::var("CARGO_TARGET_DIR").map_or_else(|_| root().join("target"), PathBuf::from);
+    target.join("browser-artifacts")
+}
+
+/// A running `dualrep serve`, killed on drop.
+struct Server {
+    child: Child,
+    url: String,
+    _data: tempfile::TempDir,
+}
+
+impl Server {
+    fn start() -> Server {
+        let data = tempfile::tempdir().expect("a temp dir");
+        let mut child = Command::new(env!("CARGO_BIN_EXE_dualrep"))
+            .args([
+                "serve",
+                "--addr",
+                "127.0.0.1:0",
+                "--token",
+                TOKEN,
+                "--data-dir",
+            ])
+            .arg(data.path())
+            .current_dir(root())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("starting dualrep serve");
+        let stdout = child.stdout.take().expect("piped stdout");
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let mut sent = false;
+            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+                if !sent && let Some(rest) = line.split("listening on ").nth(1) {
+                    let url = rest
+                        .split_whitespace()
+                        .next()
+                        .unwrap_or_default()
+                        .to_string();
+                    let _ = tx.send(url);
+                    sent = true;
+                }
+                println!("[serve] {line}");
+            }
+        });
+        let url = rx
+            .recv_timeout(Duration::from_secs(60))
+            .unwrap_or_else(|_| {
+                let _ = child.kill();
+                panic!("dualrep serve did not print \"listening on http://ADDR\" within 60 s")
+            });
+        assert!(
+            url.starts_with("http://"),
+            "unexpected listening line: {url}"
+        );
+        Server {
+            child,
+            url,
+            _data: data,
+        }
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Run `tests/browser/<script>` against a fresh server; `extra` adds environment variables.
+fn browser_test(script: &str, extra: &[(&str, &str)]) {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(chromium) = chromium() else { return };
+    node_modules();
+    let server = Server::start();
+    let artifacts = artifacts();
+    std::fs::create_dir_all(&artifacts).expect("creating the artifacts dir");
+    let started = Instant::now();
+    let mut cmd = Command::new("node");
+    cmd.arg(Path::new("tests/browser").join(script))
+        .current_dir(root())
+        .env("DUALREP_URL", &server.url)
+        .env("DUALREP_TOKEN", TOKEN)
+        .env("CHROMIUM", &chromium)
+        .env("DUALREP_ARTIFACTS", &artifacts);
+    for (k, v) in extra {
+        cmd.env(k, v);
+    }
+    let out = cmd.output().expect("running node");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    println!("{stdout}");
+    eprintln!("{stderr}");
+    drop(server);
+    assert!(
+        out.status.success(),
+        "browser test {script} failed after {:.1} s ({}):\n{stdout}\n{stderr}",
+        started.elapsed().as_secs_f64(),
+        out.status
+    );
+}
+
+#[test]
+fn dashboard_launches_dref_and_the_trainer_answers_with_keys() {
+    browser_test("dref_keys.mjs", &[]);
+}
+
+#[test]
+fn trainer_answers_a_drpl_session_with_the_mouse() {
+    browser_test("drpl_mouse.mjs", &[]);
+}
+
+#[test]
+#[ignore = "needs POST /api/sessions/{id}/survey and `survey` in GET /api/sessions/{id} (web/README.md)"]
+fn trainer_stores_the_three_questions() {
+    browser_test("drpl_mouse.mjs", &[("SURVEY", "1")]);
+}
+
+#[test]
+fn trainer_recovers_the_pending_query_after_a_dropped_socket() {
+    browser_test("reconnect.mjs", &[]);
+}
+
+#[test]
+fn review_shows_episodes_answers_and_metrics() {
+    browser_test("review.mjs", &[]);
+}
+
+#[test]
+#[ignore = "needs GET /api/sessions/{id}/episodes/{n}/frames (web/README.md)"]
+fn review_replays_an_episode() {
+    browser_test("review.mjs", &[("REPLAY", "1")]);
+}

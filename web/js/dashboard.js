@@ -1,0 +1,319 @@
+// The dashboard (/): researcher token, launch form built from GET /api/tasks, the sessions
+// table with live status, and live plots of the selected session.
+
+import { ApiError, download, getJson, getToken, postJson, setToken } from "./api.js";
+import { notify, notifyError } from "./notify.js";
+import { linePlot } from "./plot.js";
+
+const $ = (id) => document.getElementById(id);
+const POLL_MS = 2000;
+const ACTIVE = new Set(["queued", "running", "waiting"]);
+
+const state = {
+  tasks: null,
+  sessions: [],
+  selected: null,
+  alignment: new Map(), // session id -> [[progress, alignment]] seen while polling
+  pollTimer: null,
+};
+
+// ---- sign in --------------------------------------------------------------------------------
+
+function showLogin(message = "") {
+  $("login").classList.remove("hidden");
+  $("app").classList.add("hidden");
+  $("signout").classList.add("hidden");
+  $("signed").textContent = "";
+  $("login-error").textContent = message;
+  $("token").focus();
+  clearTimeout(state.pollTimer);
+}
+
+async function signIn() {
+  try {
+    state.tasks ??= await getJson("/api/tasks");
+    await getJson("/api/sessions");
+  } catch (e) {
+    if (e instanceof ApiError && e.status === 401) {
+      showLogin(getToken() ? "That token was refused." : "");
+      return;
+    }
+    notifyError(e, "The server did not answer");
+    showLogin(`The server did not answer: ${e.message}`);
+    return;
+  }
+  $("login").classList.add("hidden");
+  $("app").classList.remove("hidden");
+  $("signout").classList.remove("hidden");
+  $("signed").textContent = "Signed in";
+  buildForm();
+  poll();
+}
+
+// ---- the launch form ------------------------------------------------------------------------
+
+function isPreference(method) {
+  return (state.tasks?.methods?.preference ?? []).includes(method);
+}
+
+function option(value, text = value) {
+  return Object.assign(document.createElement("option"), { value, textContent: text });
+}
+
+function buildForm() {
+  if ($("task").options.length) return;
+  const t = state.tasks;
+  for (const task of t.tasks) $("task").append(option(task.id));
+  const ev = $("method");
+  const g1 = Object.assign(document.createElement("optgroup"), { label: "evaluative (steps)" });
+  for (const m of t.methods.evaluative.filter((m) => !m.includes("<"))) g1.append(option(m));
+  const g2 = Object.assign(document.createElement("optgroup"), { label: "preference (queries)" });
+  for (const m of t.methods.preference) g2.append(option(m));
+  ev.append(g1, g2);
+  $("pace_hz").placeholder = String(t.session_params.pace_hz);
+  $("answer_timeout_s").placeholder = String(t.session_params.answer_timeout_s);
+  $("task").addEventListener("change", fillDefaults);
+  $("method").addEventListener("change", fillDefaults);
+  $("launch-form").addEventListener("submit", launch);
+  fillDefaults();
+}
+
+function currentTask() {
+  return state.tasks.tasks.find((t) => t.id === $("task").value);
+}
+
+/** Flatten a defaults object one level: nested groups show their inner keys. */
+function flatten(obj, out = {}) {
+  for (const [k, v] of Object.entries(obj ?? {})) {
+    if (v && typeof v === "object" && !Array.isArray(v)) flatten(v, out);
+    else out[k] = v;
+  }
+  return out;
+}
+
+function fillDefaults() {
+  const task = currentTask();
+  const pref = isPreference($("method").value);
+  $("budget-label").textContent = pref ? "Queries" : "Steps";
+  $("budget").placeholder = String(pref ? task.defaults.queries : task.defaults.steps);
+  const defaults = flatten(pref ? task.defaults.drpl : task.defaults.dref);
+  const extra = { checkpoint_every: state.tasks.session_params.checkpoint_every, clip_frames: state.tasks.session_params.clip_frames };
+  const box = $("params");
+  box.replaceChildren();
+  for (const [k, v] of Object.entries({ ...defaults, ...extra })) {
+    if (["task", "method", "seed", "steps", "queries"].includes(k)) continue;
+    const label = document.createElement("label");
+    label.textContent = k;
+    const input = Object.assign(document.createElement("input"), { name: `param:${k}`, placeholder: JSON.stringify(v) });
+    input.dataset.param = k;
+    label.append(input);
+    box.append(label);
+  }
+}
+
+function parseValue(text) {
+  try {
+    return JSON.parse(text);
+  } catch {
+    return text;
+  }
+}
+
+async function launch(ev) {
+  ev.preventDefault();
+  const method = $("method").value;
+  const body = { task: $("task").value, method, trainer: $("trainer").value, seed: Number($("seed").value || 0), params: {} };
+  if ($("budget").value) body[isPreference(method) ? "queries" : "steps"] = Number($("budget").value);
+  for (const k of ["pace_hz", "answer_timeout_s"]) if ($(k).value) body.params[k] = Number($(k).value);
+  for (const input of $("params").querySelectorAll("input")) {
+    if (input.value.trim()) body.params[input.dataset.param] = parseValue(input.value.trim());
+  }
+  const extra = $("extra").value.trim();
+  if (extra) {
+    let more;
+    try {
+      more = JSON.parse(extra);
+    } catch (e) {
+      notify(`"More parameters" is not JSON: ${e.message}`, { kind: "error" });
+      return;
+    }
+    Object.assign(body.params, more);
+  }
+  $("launch").disabled = true;
+  $("launch-result").textContent = "Launching…";
+  try {
+    const created = await postJson("/api/sessions", body);
+    const link = new URL(created.trainer_url, location.origin).href;
+    $("launch-result").replaceChildren(`Session ${created.id} is ${created.status}. `);
+    if (body.trainer === "human") {
+      const a = Object.assign(document.createElement("a"), { href: link, target: "_blank", textContent: "Open the trainer page", id: "trainer-link" });
+      $("launch-result").append(a);
+    }
+    state.selected = created.id;
+    await refresh();
+  } catch (e) {
+    $("launch-result").textContent = `Not launched: ${e.message}`;
+    notifyError(e, "Not launched");
+  } finally {
+    $("launch").disabled = false;
+  }
+}
+
+// ---- the sessions table ---------------------------------------------------------------------
+
+function fmtPct(x) {
+  return x === undefined || x === null ? "–" : `${(x * 100).toFixed(1)}%`;
+}
+
+function actionButton(text, run, title = text) {
+  const b = Object.assign(document.createElement("button"), { type: "button", textContent: text, title });
+  b.addEventListener("click", async (ev) => {
+    ev.stopPropagation();
+    b.disabled = true;
+    try {
+      await run();
+    } catch (e) {
+      notifyError(e, `${text} failed`);
+    } finally {
+      b.disabled = false;
+    }
+  });
+  return b;
+}
+
+function row(s) {
+  const tr = document.createElement("tr");
+  tr.dataset.id = s.id;
+  tr.classList.toggle("selected", s.id === state.selected);
+  const td = (content, cls) => {
+    const c = document.createElement("td");
+    if (cls) c.className = cls;
+    if (content instanceof Node) c.append(content);
+    else c.textContent = content;
+    tr.append(c);
+    return c;
+  };
+  td(Object.assign(document.createElement("code"), { textContent: s.id }));
+  td(s.task);
+  td(s.method);
+  td(s.trainer);
+  td(Object.assign(document.createElement("span"), { className: `pill ${s.status}`, textContent: s.status, title: s.reason ?? "" }));
+  const bar = document.createElement("div");
+  bar.className = "progressbar";
+  bar.title = `${s.progress} of ${s.budget} ${s.unit}`;
+  bar.append(Object.assign(document.createElement("span"), { style: `width:${s.budget ? Math.min(100, (100 * s.progress) / s.budget) : 0}%` }));
+  td(bar);
+  td(String(s.answers?.total ?? 0), "num");
+  td(String(s.answers?.no_feedback ?? 0), "num");
+  td(s.unit === "steps" ? fmtPct(s.latest?.feedback_fraction) : "–", "num");
+  const actions = document.createElement("div");
+  actions.className = "actions";
+  if (ACTIVE.has(s.status)) actions.append(actionButton("Stop", () => postJson(`/api/sessions/${s.id}/stop`).then(refresh)));
+  if (["stopped", "interrupted", "failed"].includes(s.status)) actions.append(actionButton("Resume", () => postJson(`/api/sessions/${s.id}/resume`).then(refresh)));
+  actions.append(actionButton("Export", () => download(`/api/sessions/${s.id}/export?format=jsonl`, `dualrep-${s.id}.jsonl`), "Download answers, episodes and metrics (JSONL)"));
+  actions.append(actionButton("CSV", () => download(`/api/sessions/${s.id}/export?format=csv`, `dualrep-${s.id}.csv`), "Download the answers as CSV"));
+  if (s.trainer === "human") {
+    actions.append(
+      actionButton("Copy link", async () => {
+        const link = new URL(s.trainer_url, location.origin).href;
+        try {
+          await navigator.clipboard.writeText(link);
+          notify("Trainer link copied.", { kind: "ok" });
+        } catch {
+          notify(`Copy this trainer link: ${link}`, { kind: "info", timeoutMs: 0 });
+        }
+      }, "Copy the trainer link"),
+    );
+    actions.append(Object.assign(document.createElement("a"), { className: "button", href: s.trainer_url, target: "_blank", textContent: "Train" }));
+  }
+  actions.append(Object.assign(document.createElement("a"), { className: "button", href: `/review/${s.id}`, textContent: "Review" }));
+  td(actions);
+  tr.addEventListener("click", () => {
+    state.selected = s.id;
+    render();
+    showDetail();
+  });
+  return tr;
+}
+
+function render() {
+  const tbody = document.querySelector("#sessions tbody");
+  tbody.replaceChildren(...state.sessions.map(row));
+  $("empty").classList.toggle("hidden", state.sessions.length > 0);
+  $("updated").textContent = `updated ${new Date().toLocaleTimeString()}`;
+}
+
+async function refresh() {
+  try {
+    state.sessions = await getJson("/api/sessions");
+  } catch (e) {
+    if (e instanceof ApiError && e.status === 401) {
+      showLogin("The token was refused.");
+      return;
+    }
+    notify(`The sessions could not be loaded: ${e.message}`, { kind: "error", key: "poll" });
+    return;
+  }
+  for (const s of state.sessions) {
+    const a = s.latest?.alignment;
+    if (typeof a === "number") {
+      const series = state.alignment.get(s.id) ?? [];
+      if (!series.length || series[series.length - 1][0] !== s.progress) series.push([s.progress, a]);
+      state.alignment.set(s.id, series);
+    }
+  }
+  render();
+  await showDetail();
+}
+
+function poll() {
+  clearTimeout(state.pollTimer);
+  refresh().finally(() => {
+    state.pollTimer = setTimeout(poll, POLL_MS);
+  });
+}
+
+// ---- the selected session's plots -----------------------------------------------------------
+
+async function showDetail() {
+  const s = state.sessions.find((x) => x.id === state.selected);
+  if (!s) {
+    $("detail").classList.add("hidden");
+    return;
+  }
+  $("detail").classList.remove("hidden");
+  $("detail-title").textContent = `${s.task} · ${s.method} · seed ${s.seed}`;
+  $("detail-review").href = `/review/${s.id}`;
+  const pref = s.unit === "queries";
+  $("fig-alignment").classList.toggle("hidden", !pref);
+  const metrics = [`${s.progress.toLocaleString()} of ${s.budget.toLocaleString()} ${s.unit}`, `${s.answers?.total ?? 0} answers (${s.answers?.by_trainer ?? 0} by the trainer, ${s.answers?.timeouts ?? 0} timed out)`, `no feedback: ${s.answers?.no_feedback ?? 0}`];
+  if (s.trainer_seconds != null) metrics.push(`trainer time: ${s.trainer_seconds.toFixed(0)} s`);
+  $("detail-metrics").textContent = metrics.join(" · ");
+  let episodes = [];
+  try {
+    episodes = await getJson(`/api/sessions/${s.id}/episodes`);
+  } catch (e) {
+    notify(`The episodes could not be loaded: ${e.message}`, { kind: "error", key: "episodes" });
+  }
+  const last = episodes[episodes.length - 1];
+  const fb = last ? ` (feedback ${fmtPct(last.feedback_fraction)})` : "";
+  linePlot($("plot-reward"), [{ label: `${s.method}${fb}`, points: episodes.map((e) => [e.step, e.cumulative_return]) }], { xLabel: "steps", height: 160, empty: pref ? "preference sessions have no episodes" : "no finished episode yet" });
+  linePlot($("plot-returns"), [{ points: episodes.map((e) => [e.episode, e.return]) }], { xLabel: "episode", height: 160, empty: pref ? "preference sessions have no episodes" : "no finished episode yet" });
+  if (pref) {
+    linePlot($("plot-alignment"), [{ label: "alignment", points: state.alignment.get(s.id) ?? [] }], { xLabel: "queries", yMin: -1, yMax: 1, height: 160, empty: "alignment is reported for synthetic trainers" });
+  }
+}
+
+// ---- start ----------------------------------------------------------------------------------
+
+$("login-form").addEventListener("submit", (ev) => {
+  ev.preventDefault();
+  setToken($("token").value.trim());
+  signIn();
+});
+$("signout").addEventListener("click", () => {
+  setToken("");
+  showLogin();
+});
+if (getToken()) signIn();
+else showLogin();
