@@ -8,7 +8,7 @@ import { api, check, newPage, run, shot, waitFor } from "./lib.mjs";
 await run("review", async (browser) => {
   const created = await api("/api/sessions", {
     method: "POST",
-    body: { task: "reaching", method: "dref", trainer: "human", seed: 3, steps: 1200, params: { pace_hz: 1000, answer_timeout_s: 1, hidden: [32, 32], batch_size: 32 } },
+    body: { task: "lunar-lander", method: "dref", trainer: "human", seed: 3, steps: 200, params: { pace_hz: 1000, answer_timeout_s: 0.3, hidden: [32, 32], batch_size: 32 } },
   });
   const session = await waitFor("the session to finish", async () => {
     const s = await api(`/api/sessions/${created.id}`);
