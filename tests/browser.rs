@@ -193,7 +193,6 @@ fn trainer_answers_a_drpl_session_with_the_mouse() {
 }
 
 #[test]
-#[ignore = "needs POST /api/sessions/{id}/survey and `survey` in GET /api/sessions/{id} (web/README.md)"]
 fn trainer_stores_the_three_questions() {
     browser_test("drpl_mouse.mjs", &[("SURVEY", "1")]);
 }
@@ -209,7 +208,6 @@ fn review_shows_episodes_answers_and_metrics() {
 }
 
 #[test]
-#[ignore = "needs GET /api/sessions/{id}/episodes/{n}/frames (web/README.md)"]
 fn review_replays_an_episode() {
     browser_test("review.mjs", &[("REPLAY", "1")]);
 }

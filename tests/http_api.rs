@@ -198,7 +198,7 @@ async fn the_openapi_document_lists_exactly_the_routes() {
     let dir = tempfile::tempdir().unwrap();
     let router = app(state(dir.path()).await);
     for (method, path) in openapi::OPERATIONS {
-        let uri = path.replace("{id}", "nosuch");
+        let uri = path.replace("{id}", "nosuch").replace("{episode}", "0");
         let r = call(&router, &method.to_uppercase(), &uri, Some(TOKEN), None).await;
         let unrouted = r.status == StatusCode::NOT_FOUND
             && r.json()["error"]["message"]
@@ -317,6 +317,41 @@ async fn a_synthetic_drpl_session_runs_to_its_end_and_exports() {
     )
     .await
     .assert_error(StatusCode::BAD_REQUEST, "bad_request");
+    // The trainer answers the three questions once the session has ended.
+    let trainer_token = created["trainer_url"]
+        .as_str()
+        .unwrap()
+        .split("token=")
+        .nth(1)
+        .unwrap()
+        .to_string();
+    let survey_uri = format!("/api/sessions/{id}/survey");
+    let good = r#"{"overall_experience":4,"perceived_intelligence":3,"cognitive_ease":5}"#;
+    call(&router, "POST", &survey_uri, Some("nope"), Some(good))
+        .await
+        .assert_error(StatusCode::FORBIDDEN, "forbidden");
+    call(
+        &router,
+        "POST",
+        &survey_uri,
+        Some(&trainer_token),
+        Some(r#"{"overall_experience":6,"perceived_intelligence":3,"cognitive_ease":5}"#),
+    )
+    .await
+    .assert_error(StatusCode::BAD_REQUEST, "bad_request");
+    let saved = call(
+        &router,
+        "POST",
+        &survey_uri,
+        Some(&trainer_token),
+        Some(good),
+    )
+    .await;
+    assert_eq!(saved.status, StatusCode::OK);
+    assert_eq!(
+        saved.json()["survey"],
+        serde_json::from_str::<Value>(good).unwrap()
+    );
     // A finished session cannot be stopped, and resumes only from interrupted/stopped/failed.
     call(
         &router,

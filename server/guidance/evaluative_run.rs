@@ -20,7 +20,7 @@ use super::query_rule::{QueryRule, UcbForm};
 use crate::rl::replay::{ReplayBuffer, Transition};
 use crate::rl::{HumanCriticConfig, Sac, SacConfig, UpdateStats};
 use crate::scene_graph::{AbstractState, SceneGraph};
-use crate::sim::{Env, Outcome, Task};
+use crate::sim::{Env, Outcome, RenderState, Task};
 
 /// DREF's query-rule constants (algorithms.md section 2, from the authors' configs).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -130,6 +130,9 @@ pub struct StepReport {
     pub update: Option<UpdateStats>,
     /// Set when this step ended an episode (the env was reset for the next one).
     pub episode: Option<EpisodeRecord>,
+    /// The episode's last state, rendered before the env reset (set with `episode`), so a
+    /// viewer can show how it ended.
+    pub final_state: Option<RenderState>,
 }
 
 pub struct EvaluativeRun {
@@ -267,6 +270,7 @@ impl EvaluativeRun {
         self.steps += 1;
         self.episode_return += f64::from(step.reward);
         self.episode_length += 1;
+        let final_state = step.outcome.map(|_| self.env.render());
         let episode = step.outcome.map(|outcome| self.finish_episode(outcome));
         if episode.is_none() {
             self.obs.copy_from_slice(&step.obs);
@@ -277,6 +281,7 @@ impl EvaluativeRun {
             evaluation,
             update,
             episode,
+            final_state,
         }
     }
 

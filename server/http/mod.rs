@@ -52,6 +52,10 @@ pub fn app(state: AppState) -> Router {
         .route("/api/sessions/{id}/stop", post(sessions::stop))
         .route("/api/sessions/{id}/resume", post(sessions::resume))
         .route("/api/sessions/{id}/episodes", get(sessions::episodes))
+        .route(
+            "/api/sessions/{id}/episodes/{episode}/frames",
+            get(sessions::episode_frames),
+        )
         .route("/api/sessions/{id}/answers", get(sessions::answers))
         .route("/api/sessions/{id}/export", get(sessions::export))
         .route("/api/sessions/{id}/recording.rrd", get(recording))
@@ -62,6 +66,7 @@ pub fn app(state: AppState) -> Router {
     let web = state.web_dir.clone();
     let mut router = Router::new()
         .merge(researcher)
+        .route("/api/sessions/{id}/survey", post(sessions::survey))
         .route("/api/tasks", get(tasks::tasks))
         .route("/api/openapi.json", get(openapi::openapi))
         .route("/api/{*rest}", any(api_not_found))

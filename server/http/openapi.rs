@@ -5,16 +5,18 @@ use axum::Json;
 use serde_json::{Value, json};
 
 /// Every documented operation as `(method, path)`; the test compares it with the router's.
-pub const OPERATIONS: [(&str, &str); 13] = [
+pub const OPERATIONS: [(&str, &str); 15] = [
     ("post", "/api/sessions"),
     ("get", "/api/sessions"),
     ("get", "/api/sessions/{id}"),
     ("post", "/api/sessions/{id}/stop"),
     ("post", "/api/sessions/{id}/resume"),
     ("get", "/api/sessions/{id}/episodes"),
+    ("get", "/api/sessions/{id}/episodes/{episode}/frames"),
     ("get", "/api/sessions/{id}/answers"),
     ("get", "/api/sessions/{id}/export"),
     ("get", "/api/sessions/{id}/recording.rrd"),
+    ("post", "/api/sessions/{id}/survey"),
     ("get", "/api/tasks"),
     ("get", "/api/openapi.json"),
     ("get", "/healthz"),
@@ -80,6 +82,10 @@ pub fn document() -> Value {
         "parameters": id_param(),
         "get": op("Finished episodes", true, ok("Episodes", json!({"type": "array", "items": {"$ref": "#/components/schemas/Episode"}}))),
     }));
+    paths.insert("/api/sessions/{id}/episodes/{episode}/frames".into(), json!({
+        "parameters": [id_param()[0].clone(), {"name": "episode", "in": "path", "required": true, "schema": {"type": "integer", "minimum": 0}}],
+        "get": op("An episode of a human session as {geometry, frames} for replay", true, ok("The episode's frames", json!({"type": "object", "properties": {"geometry": {"type": "object"}, "frames": {"type": "array"}}}))),
+    }));
     paths.insert("/api/sessions/{id}/answers".into(), json!({
         "parameters": id_param(),
         "get": op("Answered queries in the order asked", true, ok("Answers", json!({"type": "array", "items": {"$ref": "#/components/schemas/Answer"}}))),
@@ -97,6 +103,14 @@ pub fn document() -> Value {
             "200": {"description": "An .rrd file (open with `rerun <file>`)", "content": {"application/octet-stream": {}}},
             "default": {"$ref": "#/components/responses/Error"}
         })),
+    }));
+    paths.insert("/api/sessions/{id}/survey".into(), json!({
+        "parameters": id_param(),
+        "post": {
+            "summary": "Store the trainer's answers to the paper's three 5-point questions (after the session ended); bearer = the session's trainer token or the researcher token",
+            "requestBody": {"required": true, "content": {"application/json": {"schema": {"$ref": "#/components/schemas/Survey"}}}},
+            "responses": ok("The session, with `survey`", session_ref.clone()),
+        },
     }));
     paths.insert("/api/tasks".into(), json!({
         "get": op("Tasks, their scene-graph predicates and defaults", false, ok("Tasks", json!({"type": "object"}))),
@@ -153,8 +167,16 @@ pub fn document() -> Value {
                     "answers": {"type": "object", "properties": {"total": {"type": "integer"}, "by_trainer": {"type": "integer"}, "timeouts": {"type": "integer"}, "no_feedback": {"type": "integer"}}},
                     "latest": {"type": "object"}, "trainer_url": {"type": "string"},
                     "created_at": {"type": "string"}, "started_at": {"type": "string"}, "ended_at": {"type": "string"},
-                    "trainer_seconds": {"type": "number"}
+                    "trainer_seconds": {"type": "number"},
+                    "survey": {"oneOf": [{"$ref": "#/components/schemas/Survey"}, {"type": "null"}]}
                 }},
+                "Survey": {"type": "object", "additionalProperties": false,
+                    "required": ["overall_experience", "perceived_intelligence", "cognitive_ease"],
+                    "properties": {
+                        "overall_experience": {"type": "integer", "minimum": 1, "maximum": 5},
+                        "perceived_intelligence": {"type": "integer", "minimum": 1, "maximum": 5},
+                        "cognitive_ease": {"type": "integer", "minimum": 1, "maximum": 5}
+                    }},
                 "Answer": {"type": "object", "required": ["query_id", "kind", "step", "value", "answered_at", "latency_ms"], "properties": {
                     "query_id": {"type": "integer"}, "seq": {"type": "integer"}, "kind": {"type": "string", "enum": ["evaluative", "preference"]},
                     "step": {"type": "integer"}, "abstract_state": {"type": "integer"},

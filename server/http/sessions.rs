@@ -14,7 +14,7 @@ use super::error::{ApiError, ApiResult};
 use crate::session::spec::DEFAULT_QUERIES;
 use crate::session::{SessionMethod, SessionSpec, TrainerKind};
 use crate::sim::Task;
-use crate::store::{AnswerCounts, SessionRow, Status};
+use crate::store::{AnswerCounts, SessionRow, Status, Survey};
 
 /// `POST /api/sessions`.
 #[derive(Debug, Deserialize)]
@@ -91,6 +91,8 @@ pub struct SessionView {
     pub ended_at: Option<String>,
     /// The trainer's total time in seconds: first query asked to last answer (the paper's T).
     pub trainer_seconds: Option<f64>,
+    /// The trainer's answers to the three questions after a human session.
+    pub survey: Option<Survey>,
 }
 
 pub fn trainer_url(row: &SessionRow) -> String {
@@ -112,6 +114,7 @@ async fn view(state: &AppState, row: SessionRow) -> ApiResult<SessionView> {
     };
     let answers = state.store.answer_counts(&row.id).await?;
     let trainer_seconds = state.store.trainer_seconds(&row.id).await?;
+    let survey = state.store.survey(&row.id).await?;
     Ok(SessionView {
         unit: if row
             .config
@@ -141,6 +144,7 @@ async fn view(state: &AppState, row: SessionRow) -> ApiResult<SessionView> {
         started_at: row.started_at,
         ended_at: row.ended_at,
         trainer_seconds,
+        survey,
     })
 }
 
@@ -327,4 +331,59 @@ pub async fn export(
         body,
     )
         .into_response())
+}
+
+/// `POST /api/sessions/{id}/survey`: the trainer (its session token) or a researcher stores the
+/// answers to the three questions, once the session has ended.
+pub async fn survey(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+    headers: axum::http::HeaderMap,
+    body: Result<Json<Survey>, JsonRejection>,
+) -> ApiResult<Json<SessionView>> {
+    let r = row(&state, &id).await?;
+    let token = headers
+        .get(header::AUTHORIZATION)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.strip_prefix("Bearer "))
+        .map(str::trim)
+        .ok_or_else(|| {
+            ApiError::unauthorized("send the trainer token as `Authorization: Bearer <token>`")
+        })?;
+    if !super::auth::same_token(token, &r.trainer_token)
+        && !super::auth::same_token(token, &state.token)
+    {
+        return Err(ApiError::new(
+            StatusCode::FORBIDDEN,
+            "forbidden",
+            format!("this token is not valid for session {id}"),
+        ));
+    }
+    let Json(survey) = body.map_err(|e| ApiError::bad_request(e.body_text()))?;
+    survey.validate().map_err(ApiError::bad_request)?;
+    if state.hub.status_of(&r).is_active() {
+        return Err(ApiError::new(
+            StatusCode::CONFLICT,
+            "conflict",
+            "the questions come after the session has ended",
+        ));
+    }
+    state.store.save_survey(&id, &survey).await?;
+    Ok(Json(view(&state, r).await?))
+}
+
+/// `GET .../episodes/{n}/frames`: an episode of a human session as `{geometry, frames}`, for
+/// replay in the review page.
+pub async fn episode_frames(
+    State(state): State<AppState>,
+    Path((id, episode)): Path<(String, u64)>,
+) -> ApiResult<Response> {
+    row(&state, &id).await?;
+    let path = state.hub.frames_path(&id, episode);
+    let bytes = tokio::fs::read(&path).await.map_err(|_| {
+        ApiError::not_found(format!(
+            "no frames of episode {episode} of session {id} (frames are kept for the episodes of human sessions)"
+        ))
+    })?;
+    Ok(([(header::CONTENT_TYPE, "application/json")], bytes).into_response())
 }

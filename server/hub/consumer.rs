@@ -28,6 +28,8 @@ pub(super) async fn consume(
     let mut batch: Vec<SyntheticAnswer> = Vec::new();
     let mut stored_progress_at = Instant::now();
     let mut ending = Ending::Failed("the session thread ended without a word".into());
+    // The running episode's frames, written to the data dir when it ends (for replay in review).
+    let mut episode_frames = EpisodeFrames::default();
     while let Some(event) = rx.recv().await {
         let result: Result<(), sqlx::Error> = async {
             match event {
@@ -40,6 +42,7 @@ pub(super) async fn consume(
                     if let Some(g) = &frame.geometry {
                         live.lock().geometry = Some(g.clone());
                     }
+                    episode_frames.push(&frame, live.lock().geometry.as_ref());
                     live.broadcast_message(&ServerMessage::Frame(*frame));
                 }
                 SessionEvent::Query {
@@ -98,6 +101,10 @@ pub(super) async fn consume(
                 }
                 SessionEvent::Episode(e) => {
                     store.insert_episode(&id, &e).await?;
+                    if let Some(clip) = episode_frames.take(e.episode) {
+                        let path = hub.frames_path(&id, e.episode);
+                        tokio::task::spawn_blocking(move || write_json(&path, &clip));
+                    }
                     live.push_return(e.episode_return);
                     live.lock().progress.feedback_fraction = e.feedback_fraction;
                     live.broadcast_message(&live.progress_message());
@@ -211,4 +218,56 @@ fn spawn_timeout(hub: Arc<Hub>, live: Arc<Live>, query_id: i64, timeout: Duratio
             let _ = live.answer(&hub.store, query_id, value, "timeout").await;
         }
     });
+}
+
+/// Frames of the episode being played, in the shape of a query clip.
+#[derive(Default)]
+struct EpisodeFrames {
+    episode: Option<u64>,
+    geometry: Option<crate::sim::Geometry>,
+    frames: Vec<crate::sim::RenderState>,
+}
+
+impl EpisodeFrames {
+    fn push(&mut self, frame: &crate::session::Frame, geometry: Option<&crate::sim::Geometry>) {
+        if self.episode != Some(frame.episode) {
+            self.episode = Some(frame.episode);
+            self.frames.clear();
+            self.geometry = None;
+        }
+        if self.geometry.is_none() {
+            self.geometry = frame.geometry.clone().or_else(|| geometry.cloned());
+        }
+        self.frames.push(frame.state.clone());
+    }
+
+    /// The frames of `episode`, if they were streamed.
+    fn take(&mut self, episode: u64) -> Option<crate::session::Clip> {
+        if self.episode != Some(episode) || self.frames.is_empty() {
+            return None;
+        }
+        self.episode = None;
+        Some(crate::session::Clip {
+            geometry: self.geometry.take()?,
+            frames: std::mem::take(&mut self.frames),
+        })
+    }
+}
+
+/// Write JSON atomically (a temporary file renamed into place); failures are logged.
+fn write_json(path: &std::path::Path, value: &impl serde::Serialize) {
+    let result = (|| -> std::io::Result<()> {
+        if let Some(dir) = path.parent() {
+            std::fs::create_dir_all(dir)?;
+        }
+        let tmp = path.with_extension("json.tmp");
+        std::fs::write(
+            &tmp,
+            serde_json::to_vec(value).map_err(std::io::Error::other)?,
+        )?;
+        std::fs::rename(&tmp, path)
+    })();
+    if let Err(e) = result {
+        tracing::error!("writing {}: {e}", path.display());
+    }
 }

@@ -318,6 +318,15 @@ impl Hub {
         }
     }
 
+    /// Where the frames of a human session's episode are kept: `<data dir>/frames/<id>/<n>.json`.
+    pub fn frames_path(&self, id: &str, episode: u64) -> PathBuf {
+        self.config
+            .data_dir
+            .join("frames")
+            .join(id)
+            .join(format!("{episode}.json"))
+    }
+
     /// Write a learner checkpoint to `<data dir>/checkpoints/<id>.safetensors` (atomically) and
     /// return its path relative to the data dir.
     async fn write_checkpoint(&self, id: &str, bytes: Vec<u8>) -> std::io::Result<String> {

@@ -337,7 +337,11 @@ fn run_evaluative(
     let period = Duration::from_secs_f64(1.0 / settings.pace_hz);
     let mut next_tick = Instant::now();
     let mut last_progress = Instant::now();
-    let (mut episode, mut episode_return, mut new_episode) = (0u64, 0.0f64, false);
+    // The first frame a browser can see carries the geometry, as every episode's first does
+    // (after a resume, that is the first frame after the replay).
+    let (mut episode, mut episode_return, mut need_geometry) = (0u64, 0.0f64, true);
+    // The geometry of the episode being played (the env's is the next one's at an episode end).
+    let mut episode_geometry = run.env().geometry();
     while run.steps() < spec.budget {
         if let Some(h) = trainer.asker.controls.poll() {
             return Ok(end_evaluative(h, &run, sink.as_ref(), false));
@@ -351,9 +355,13 @@ fn run_evaluative(
         // Catching up on stored answers after a resume: no frames, no pacing.
         let live = human && !trainer.asker.replaying();
         if let Judge::Human { history, .. } = &mut trainer.judge {
-            let state = run.env().render();
+            // At an episode's end the env has already reset: show the state it ended in.
+            let state = report
+                .final_state
+                .clone()
+                .unwrap_or_else(|| run.env().render());
             if report.episode.is_some() {
-                history.start_episode(run.env().geometry(), state.clone());
+                history.start_episode(run.env().geometry(), run.env().render());
             } else {
                 history.push(state.clone());
             }
@@ -362,13 +370,16 @@ fn run_evaluative(
                     step: run.steps(),
                     episode,
                     state,
-                    geometry: new_episode.then(|| run.env().geometry()),
+                    geometry: std::mem::take(&mut need_geometry).then(|| episode_geometry.clone()),
                     reward: report.reward,
                     episode_return,
                 })));
             }
         }
-        new_episode = report.episode.is_some();
+        if report.episode.is_some() {
+            need_geometry = true;
+            episode_geometry = run.env().geometry();
+        }
         if let Some(e) = report.episode {
             sink.send(SessionEvent::Episode(e));
             episode += 1;

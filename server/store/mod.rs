@@ -6,6 +6,7 @@
 //! - `queries`: what was asked (kind, step, abstract state, payload) and the answers given.
 //! - `episodes`: finished episodes' metrics.
 //! - `checkpoints`: where a session was, and the learner's digest.
+//! - `surveys`: the trainer's answers to the paper's three questions.
 
 /// The current time as the RFC 3339 text every table stores (UTC, milliseconds), as a literal
 /// for `concat!`: sqlx takes only static SQL.
@@ -19,6 +20,7 @@ mod checkpoints;
 mod episodes;
 mod queries;
 mod sessions;
+mod surveys;
 
 use std::path::Path;
 use std::str::FromStr;
@@ -31,6 +33,7 @@ pub use checkpoints::CheckpointRow;
 pub use episodes::EpisodeRow;
 pub use queries::{AnswerCounts, AnswerRow, CommitOutcome, QueryRow, SyntheticAnswer};
 pub use sessions::{NewSession, SessionRow, Status};
+pub use surveys::Survey;
 
 /// The database file inside the data dir.
 pub const DB_FILE: &str = "dualrep.db";
