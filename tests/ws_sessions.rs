@@ -72,8 +72,8 @@ async fn a_human_dref_session_runs_to_its_end_with_every_answer_stored() {
     let api = Api::new(server.addr);
     let (id, token) = launch(
         &api,
-        json!({"task": "reaching", "method": "dref", "trainer": "human", "seed": 1, "steps": 150,
-               "params": {"pace_hz": 40, "hidden": [32, 32], "batch_size": 32, "answer_timeout_s": 30}}),
+        json!({"task": "reaching", "method": "dref", "trainer": "human", "seed": 1, "steps": 100,
+               "params": {"pace_hz": 15, "hidden": [32, 32], "batch_size": 32, "answer_timeout_s": 30}}),
     )
     .await;
     let mut t = Trainer::connect(server.addr, &id, &token).await;
@@ -107,13 +107,13 @@ async fn a_human_dref_session_runs_to_its_end_with_every_answer_stored() {
     let s = api.get(&format!("/api/sessions/{id}")).await;
     assert_eq!(
         (s["status"].as_str(), s["progress"].as_u64()),
-        (Some("finished"), Some(150))
+        (Some("finished"), Some(100))
     );
     assert_eq!(
         s["answers"]["by_trainer"].as_u64(),
         Some(acked.len() as u64)
     );
-    // Episodes end by success, failure or time limit; 150 steps may hold none of them.
+    // Episodes end by success, failure or time limit; 100 steps may hold none of them.
     assert!(
         api.get(&format!("/api/sessions/{id}/episodes"))
             .await

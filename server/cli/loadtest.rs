@@ -89,7 +89,8 @@ fn value_for(query_id: i64) -> i64 {
 }
 
 async fn trainer(url: String, until: Instant, log: Arc<Mutex<TrainerLog>>) {
-    let socket = match tokio_tungstenite::connect_async(&url).await {
+    // Nagle off, as a browser's small websocket messages go out at once.
+    let socket = match tokio_tungstenite::connect_async_with_config(&url, None, true).await {
         Ok((s, _)) => s,
         Err(_) => {
             log.lock().unwrap().connect_failures += 1;

@@ -213,6 +213,13 @@ pub async fn start(args: ServeArgs) -> anyhow::Result<Running> {
         hub.shutdown(grace).await;
     };
     let task = tokio::spawn(async move {
+        // Answers and acks are small messages: without TCP_NODELAY, Nagle's algorithm and the
+        // peer's delayed ACK hold some of them back ~40 ms.
+        let listener = axum::serve::ListenerExt::tap_io(listener, |tcp| {
+            if let Err(e) = tcp.set_nodelay(true) {
+                tracing::warn!("TCP_NODELAY: {e}");
+            }
+        });
         axum::serve(listener, app(state))
             .with_graceful_shutdown(drain)
             .await

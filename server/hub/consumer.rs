@@ -70,14 +70,14 @@ pub(super) async fn consume(
                     let now = Instant::now();
                     {
                         let mut s = live.lock();
-                        s.pending = Some(Pending {
-                            id: query_id,
+                        s.pending = Some(Pending::new(
+                            query_id,
                             seq,
-                            kind: live.kind,
-                            text: text.clone(),
-                            asked: now,
-                            deadline: now + timeout,
-                        });
+                            live.kind,
+                            text.clone(),
+                            now,
+                            timeout,
+                        ));
                         s.status = Status::Waiting;
                     }
                     live.broadcast(text);

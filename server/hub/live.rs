@@ -28,7 +28,34 @@ pub struct Pending {
     pub text: Arc<str>,
     pub asked: Instant,
     pub deadline: Instant,
+    /// Held while an answer commits; then holds the stored answer. Trainers answering at the
+    /// same moment queue here instead of racing to the database, and get the stored answer.
+    pub commit: Arc<tokio::sync::Mutex<Option<AnswerValue>>>,
 }
+
+impl Pending {
+    pub fn new(
+        id: i64,
+        seq: u64,
+        kind: &'static str,
+        text: Arc<str>,
+        asked: Instant,
+        timeout: std::time::Duration,
+    ) -> Self {
+        Self {
+            id,
+            seq,
+            kind,
+            text,
+            asked,
+            deadline: asked + timeout,
+            commit: Arc::new(tokio::sync::Mutex::new(None)),
+        }
+    }
+}
+
+/// Answers kept in memory after their query closed, so repeats need no database read.
+const RECENT_ANSWERS: usize = 256;
 
 /// What browsers need to (re)join.
 #[derive(Debug)]
@@ -41,6 +68,8 @@ pub struct LiveState {
     pub control: Option<Sender<Control>>,
     /// Set by `stop` before the session thread exists (a queued session).
     pub stop_requested: bool,
+    /// The latest committed answers, newest last.
+    pub recent: std::collections::VecDeque<(i64, AnswerValue)>,
 }
 
 /// A session known to the hub.
@@ -94,6 +123,7 @@ impl Live {
                 progress,
                 control: None,
                 stop_requested: false,
+                recent: std::collections::VecDeque::new(),
             }),
             tx,
         }
@@ -180,6 +210,10 @@ impl Live {
             );
         }
         let latency_ms = pending.asked.elapsed().as_millis() as u64;
+        let mut committed = pending.commit.lock().await;
+        if let Some(stored) = *committed {
+            return self.repeat(id, value, stored);
+        }
         let outcome = match store
             .commit_answer(id, &self.id, value, who, latency_ms)
             .await
@@ -195,6 +229,7 @@ impl Live {
         };
         match outcome {
             CommitOutcome::Committed => {
+                *committed = Some(value);
                 self.deliver(
                     &pending,
                     value,
@@ -206,7 +241,10 @@ impl Live {
                 );
                 AnswerReply::Ack(value)
             }
-            CommitOutcome::AlreadyAnswered(stored) => self.repeat(id, value, stored),
+            CommitOutcome::AlreadyAnswered(stored) => {
+                *committed = Some(stored);
+                self.repeat(id, value, stored)
+            }
         }
     }
 
@@ -220,6 +258,10 @@ impl Live {
             }
         }
         s.progress.answered += 1;
+        if s.recent.len() == RECENT_ANSWERS {
+            s.recent.pop_front();
+        }
+        s.recent.push_back((pending.id, value));
         if let Some(control) = &s.control {
             let _ = control.send(Control::Answer {
                 seq: pending.seq,
@@ -249,6 +291,16 @@ impl Live {
 
     /// An answer for a query that is not the open one: a repeat, someone else's, or nonsense.
     async fn answer_not_pending(&self, store: &Store, id: i64, value: AnswerValue) -> AnswerReply {
+        let recent = self
+            .lock()
+            .recent
+            .iter()
+            .rev()
+            .find(|(q, _)| *q == id)
+            .map(|(_, v)| *v);
+        if let Some(stored) = recent {
+            return self.repeat(id, value, stored);
+        }
         let refuse =
             |code, message: String| AnswerReply::Refused(ProtocolError::new(code, message));
         let query = match store.query(id).await {

@@ -33,7 +33,7 @@ impl Store {
         .bind(answers as i64)
         .bind(digest)
         .bind(file)
-        .execute(self.pool())
+        .execute(self.writer())
         .await?;
         Ok(())
     }

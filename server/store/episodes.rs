@@ -42,7 +42,7 @@ impl Store {
         .bind(e.feedback_count as i64)
         .bind(e.feedback_fraction)
         .bind(outcome)
-        .execute(self.pool())
+        .execute(self.writer())
         .await?;
         Ok(())
     }

@@ -43,7 +43,13 @@ pub type Result<T> = std::result::Result<T, sqlx::Error>;
 
 #[derive(Clone, Debug)]
 pub struct Store {
+    /// Readers (WAL lets them run beside the writer).
     pool: SqlitePool,
+    /// One connection for every write: writers queue here, in order, instead of contending for
+    /// SQLite's lock (whose busy handler sleeps in steps of milliseconds).
+    writer: SqlitePool,
+    /// The answer writer's queue (`queries::group_commit`).
+    committer: tokio::sync::mpsc::Sender<queries::CommitRequest>,
 }
 
 impl Store {
@@ -57,29 +63,48 @@ impl Store {
             .synchronous(sqlx::sqlite::SqliteSynchronous::Full)
             .foreign_keys(true)
             .busy_timeout(Duration::from_secs(10));
+        let writer = sqlx::sqlite::SqlitePoolOptions::new()
+            .max_connections(1)
+            .connect_with(options.clone())
+            .await?;
         let pool = sqlx::sqlite::SqlitePoolOptions::new()
             .max_connections(8)
             .connect_with(options)
             .await?;
-        let store = Self { pool };
+        let store = Self::assemble(pool, writer);
         store.migrate().await?;
         Ok(store)
     }
 
     /// A store over an existing pool (`#[sqlx::test]` hands one in); migrations applied.
     pub async fn from_pool(pool: SqlitePool) -> anyhow::Result<Self> {
-        let store = Self { pool };
+        let store = Self::assemble(pool.clone(), pool);
         store.migrate().await?;
         Ok(store)
     }
 
+    /// The store over its pools, with its answer writer running on the current runtime.
+    fn assemble(pool: SqlitePool, writer: SqlitePool) -> Self {
+        let (committer, requests) = tokio::sync::mpsc::channel(4096);
+        tokio::spawn(queries::group_commit(writer.clone(), requests));
+        Self {
+            pool,
+            writer,
+            committer,
+        }
+    }
+
     async fn migrate(&self) -> anyhow::Result<()> {
-        sqlx::migrate!("./migrations").run(&self.pool).await?;
+        sqlx::migrate!("./migrations").run(&self.writer).await?;
         Ok(())
     }
 
     pub fn pool(&self) -> &SqlitePool {
         &self.pool
+    }
+
+    fn writer(&self) -> &SqlitePool {
+        &self.writer
     }
 
     /// Whether the database answers (for `/healthz`).

@@ -88,7 +88,7 @@ impl Store {
             .bind(step as i64)
             .bind(i64::from(abstract_state))
             .bind(payload)
-            .fetch_one(self.pool())
+            .fetch_one(self.writer())
             .await?;
         Ok(row.get("id"))
     }
@@ -120,7 +120,8 @@ impl Store {
         Ok(row.map(|r| r.get("payload")))
     }
 
-    /// Commit an answer; returns only after the transaction is durable.
+    /// Commit an answer; returns only after the transaction is durable. Answers committing at
+    /// the same moment share one transaction (and one fsync): see `group_commit`.
     pub async fn commit_answer(
         &self,
         query_id: i64,
@@ -129,30 +130,19 @@ impl Store {
         who: &str,
         latency_ms: u64,
     ) -> Result<CommitOutcome> {
-        let inserted = sqlx::query(concat!(
-            "INSERT INTO answers (query_id, session_id, value, who, latency_ms, answered_at)
-             VALUES (?, ?, ?, ?, ?, ",
-            now!(),
-            ") ON CONFLICT (query_id) DO NOTHING"
-        ))
-        .bind(query_id)
-        .bind(session_id)
-        .bind(value_json(value))
-        .bind(who)
-        .bind(latency_ms as i64)
-        .execute(self.pool())
-        .await?
-        .rows_affected();
-        if inserted == 1 {
-            return Ok(CommitOutcome::Committed);
+        let (reply, outcome) = tokio::sync::oneshot::channel();
+        let request = CommitRequest {
+            query_id,
+            session_id: session_id.to_string(),
+            value,
+            who: who.to_string(),
+            latency_ms,
+            reply,
+        };
+        if self.committer.send(request).await.is_err() {
+            return Err(sqlx::Error::PoolClosed);
         }
-        let row = sqlx::query("SELECT value FROM answers WHERE query_id = ?")
-            .bind(query_id)
-            .fetch_one(self.pool())
-            .await?;
-        Ok(CommitOutcome::AlreadyAnswered(parse_value(
-            row.get("value"),
-        )))
+        outcome.await.map_err(|_| sqlx::Error::PoolClosed)?
     }
 
     /// The stored answer to a query, if any.
@@ -171,7 +161,7 @@ impl Store {
         session_id: &str,
         batch: &[SyntheticAnswer],
     ) -> Result<()> {
-        let mut tx = self.pool().begin().await?;
+        let mut tx = self.writer().begin().await?;
         for a in batch {
             let id: Option<i64> = sqlx::query(concat!(
                 "INSERT INTO queries (session_id, seq, kind, step, abstract_state, payload, asked_at)
@@ -296,4 +286,117 @@ impl Store {
         .await?;
         Ok(r.get("seconds"))
     }
+}
+
+/// One answer waiting to be committed.
+pub(super) struct CommitRequest {
+    query_id: i64,
+    session_id: String,
+    value: AnswerValue,
+    who: String,
+    latency_ms: u64,
+    reply: tokio::sync::oneshot::Sender<Result<CommitOutcome>>,
+}
+
+/// Answers per transaction at most.
+const GROUP_COMMIT_MAX: usize = 256;
+
+/// The answer writer: takes every request that queued while the previous transaction was
+/// committing and commits them together, so that a burst of answers (many sessions asking at
+/// once) costs one fsync instead of one each. Each caller learns its own outcome.
+pub(super) async fn group_commit(
+    writer: sqlx::SqlitePool,
+    mut rx: tokio::sync::mpsc::Receiver<CommitRequest>,
+) {
+    while let Some(first) = rx.recv().await {
+        let mut batch = vec![first];
+        while batch.len() < GROUP_COMMIT_MAX {
+            match rx.try_recv() {
+                Ok(r) => batch.push(r),
+                Err(_) => break,
+            }
+        }
+        match commit_batch(&writer, &batch).await {
+            Ok(outcomes) => {
+                for (r, o) in batch.into_iter().zip(outcomes) {
+                    let _ = r.reply.send(Ok(o));
+                }
+            }
+            Err(e) => {
+                tracing::error!("committing {} answer(s) failed: {e}", batch.len());
+                let message = e.to_string();
+                for r in batch {
+                    let _ = r.reply.send(Err(sqlx::Error::Protocol(message.clone())));
+                }
+            }
+        }
+    }
+}
+
+/// One multi-row statement (one implicit transaction, one fsync) for the whole batch; rows that
+/// hit an existing answer come back with that answer.
+async fn commit_batch(
+    writer: &sqlx::SqlitePool,
+    batch: &[CommitRequest],
+) -> Result<Vec<CommitOutcome>> {
+    let mut insert = sqlx::QueryBuilder::<sqlx::Sqlite>::new(
+        "INSERT INTO answers (query_id, session_id, value, who, latency_ms, answered_at) ",
+    );
+    insert.push_values(batch, |mut row, r| {
+        row.push_bind(r.query_id)
+            .push_bind(r.session_id.clone())
+            .push_bind(value_json(r.value))
+            .push_bind(r.who.clone())
+            .push_bind(r.latency_ms as i64)
+            .push(now!());
+    });
+    insert.push(" ON CONFLICT (query_id) DO NOTHING RETURNING query_id");
+    let inserted: std::collections::HashSet<i64> = insert
+        .build()
+        .fetch_all(writer)
+        .await?
+        .iter()
+        .map(|r| r.get("query_id"))
+        .collect();
+    let mut existing = std::collections::HashMap::new();
+    let conflicts: Vec<i64> = batch
+        .iter()
+        .map(|r| r.query_id)
+        .filter(|q| !inserted.contains(q))
+        .collect();
+    if !conflicts.is_empty() {
+        let mut select = sqlx::QueryBuilder::<sqlx::Sqlite>::new(
+            "SELECT query_id, value FROM answers WHERE query_id IN (",
+        );
+        let mut ids = select.separated(", ");
+        for q in &conflicts {
+            ids.push_bind(*q);
+        }
+        select.push(")");
+        for r in select.build().fetch_all(writer).await? {
+            existing.insert(r.get::<i64, _>("query_id"), parse_value(r.get("value")));
+        }
+    }
+    // Within a batch, the first request for a query is the one that was inserted.
+    let mut claimed = std::collections::HashSet::new();
+    Ok(batch
+        .iter()
+        .map(|r| {
+            if inserted.contains(&r.query_id) && claimed.insert(r.query_id) {
+                CommitOutcome::Committed
+            } else {
+                let stored = existing
+                    .get(&r.query_id)
+                    .copied()
+                    .or_else(|| {
+                        batch
+                            .iter()
+                            .find(|b| b.query_id == r.query_id)
+                            .map(|b| b.value)
+                    })
+                    .unwrap_or(r.value);
+                CommitOutcome::AlreadyAnswered(stored)
+            }
+        })
+        .collect())
 }

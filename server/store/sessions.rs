@@ -133,7 +133,7 @@ impl Store {
         .bind(s.budget as i64)
         .bind(s.config.to_string())
         .bind(s.trainer_token)
-        .execute(self.pool())
+        .execute(self.writer())
         .await?;
         self.session(s.id).await?.ok_or(sqlx::Error::RowNotFound)
     }
@@ -191,7 +191,7 @@ impl Store {
             .bind(progress as i64)
             .bind(latest.to_string())
             .bind(id)
-            .execute(self.pool())
+            .execute(self.writer())
             .await?;
         Ok(())
     }
@@ -203,7 +203,7 @@ impl Store {
             "UPDATE sessions SET status = 'interrupted', reason = 'the server stopped while it ran'
              WHERE status IN ('running', 'waiting') RETURNING id",
         )
-        .fetch_all(self.pool())
+        .fetch_all(self.writer())
         .await?
         .iter()
         .map(|r| r.get("id"))

@@ -43,7 +43,7 @@ impl Store {
         .bind(i64::from(s.overall_experience))
         .bind(i64::from(s.perceived_intelligence))
         .bind(i64::from(s.cognitive_ease))
-        .execute(self.pool())
+        .execute(self.writer())
         .await?;
         Ok(())
     }
