@@ -254,6 +254,12 @@ fn check_task(task: Task, steps: u64) {
             .starts_with("#0 evaluative: g = "),
         "{texts:?}"
     );
+    // To look at the recordings: DUALREP_KEEP_RECORDINGS=DIR keeps a copy of each file there.
+    if let Some(keep) = std::env::var_os("DUALREP_KEEP_RECORDINGS") {
+        let keep = Path::new(&keep);
+        std::fs::create_dir_all(keep).unwrap();
+        std::fs::copy(&rrd, keep.join(format!("{task}.rrd"))).unwrap();
+    }
     let size = std::fs::metadata(&rrd).unwrap().len();
     eprintln!(
         "{task}: {} steps, {} episodes, {asked} queries: {size} bytes",
