@@ -191,7 +191,9 @@ impl Recorder {
     }
 
     /// Log everything queued, flush the sinks (the file gets its footer), and join the
-    /// logging thread. Returns the first error the thread met.
+    /// logging thread. Returns the first error the thread met; a live viewer that cannot be
+    /// reached is one (after the gRPC sink's 5 s connect timeout), and the file is complete
+    /// all the same.
     pub fn finish(mut self) -> anyhow::Result<()> {
         self.close()
     }
