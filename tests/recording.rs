@@ -17,6 +17,12 @@ use dualrep::scene_graph::SceneGraph;
 use dualrep::sim::Task;
 use serde_json::Value;
 
+/// A session moves its recorder to the training thread.
+const _: fn() = || {
+    fn send<T: Send>() {}
+    send::<Recorder>();
+};
+
 /// Answers +1, 0, -1 in turn: deterministic, and every value appears.
 struct Cycling(u64);
 
