@@ -33,6 +33,9 @@
 //!   and graceful shutdown.
 //! - [`http`]: REST routes, auth, errors, the web UI's files; [`ws`]: the trainer websocket and
 //!   its typed protocol.
+//! - [`record`]: the Rerun recording of a session (scene per step, rewards, predicates,
+//!   queries and answers on `step` and `episode` timelines) to an `.rrd` file and/or a live
+//!   viewer, from a logging thread behind a bounded channel.
 //! - [`report`]: the paper's Figures 3 and 5: the run grid and its child processes, aggregation
 //!   over seeds, `table.md`, SVG and PNG figures (aggregation and tables are pure functions).
 //! - [`cli`]: the `dualrep` command line: `serve`, `sim`, `train`, `prefs`, `expert`,
@@ -42,6 +45,7 @@ pub mod cli;
 pub mod guidance;
 pub mod http;
 pub mod hub;
+pub mod record;
 pub mod report;
 pub mod rl;
 pub mod scene_graph;

@@ -178,6 +178,7 @@ async fn loadtest(args: LoadtestArgs) -> anyhow::Result<()> {
                 models_dir: "models".into(),
                 cors_origins: vec![],
                 shutdown_grace_s: 30.0,
+                rerun_connect: None,
             })
             .await?;
             (running.addr, running.token.clone(), Some(running))
@@ -195,7 +196,8 @@ async fn loadtest(args: LoadtestArgs) -> anyhow::Result<()> {
             .json(&json!({
                 "task": args.task, "method": "ef-100", "trainer": "human", "seed": seed, "steps": steps,
                 "params": {"pace_hz": args.pace_hz, "answer_timeout_s": 30, "hidden": [32, 32],
-                           "batch_size": 32, "learning_starts": steps + 1, "checkpoint_every": steps + 1}
+                           "batch_size": 32, "learning_starts": steps + 1, "checkpoint_every": steps + 1,
+                           "record": false}
             }))
             .send()
             .await?

@@ -38,6 +38,10 @@ pub struct ServeArgs {
     /// Origins allowed to call the API cross-site (repeatable); none by default.
     #[arg(long = "cors-origin")]
     pub cors_origins: Vec<String>,
+    /// Stream every session's recording to a running Rerun viewer too (e.g.
+    /// rerun+http://127.0.0.1:9876/proxy); a session's `rerun_connect` param overrides it.
+    #[arg(long)]
+    pub rerun_connect: Option<String>,
     /// Seconds sessions get to checkpoint at shutdown.
     #[arg(long, default_value_t = 30.0)]
     pub shutdown_grace_s: f64,
@@ -178,6 +182,7 @@ pub async fn start(args: ServeArgs) -> anyhow::Result<Running> {
             data_dir: args.data_dir.clone(),
             models_dir: args.models_dir.clone(),
             max_running,
+            rerun_connect: args.rerun_connect.clone(),
         },
     );
     let interrupted = hub.recover().await?;

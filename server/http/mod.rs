@@ -109,7 +109,7 @@ async fn recording(State(state): State<AppState>, Path(id): Path<String>) -> Api
     if state.store.session(&id).await?.is_none() {
         return Err(ApiError::not_found(format!("no session {id}")));
     }
-    let path = state.data_dir.join("recordings").join(format!("{id}.rrd"));
+    let path = state.hub.recording_path(&id);
     let bytes = tokio::fs::read(&path).await.map_err(|_| {
         ApiError::not_found(format!(
             "session {id} has no recording (recording was off, or it has not started)"

@@ -5,9 +5,11 @@
 //! - `live`: one session's live state and the answer path.
 //! - `consumer`: applies a session's events to the store and the browsers.
 //! - `sink`: the channel a session thread reports into.
+//! - `recording`: the session's Rerun recording as its observer.
 
 mod consumer;
 pub mod live;
+mod recording;
 mod sink;
 
 use std::collections::HashMap;
@@ -32,6 +34,8 @@ pub struct HubConfig {
     pub models_dir: PathBuf,
     /// Sessions running at once; the rest wait as `queued`.
     pub max_running: usize,
+    /// Stream every session's recording to this Rerun viewer too (`--rerun-connect`).
+    pub rerun_connect: Option<String>,
 }
 
 pub struct Hub {
@@ -188,6 +192,20 @@ impl Hub {
         let verify = checkpoint
             .filter(|c| c.answers as usize <= stored_answers.len())
             .map(|c| (c.progress as u64, c.digest));
+        let observer = match self.recorder(&live) {
+            Ok(r) => r,
+            Err(e) => {
+                let reason = format!("the recording could not start: {e:#}");
+                tracing::error!(session = %id, "{reason}");
+                let _ = self
+                    .store
+                    .set_status(&id, Status::Failed, Some(&reason))
+                    .await;
+                live.lock().status = Status::Failed;
+                self.forget(&live);
+                return;
+            }
+        };
         let (control_tx, control_rx) = std::sync::mpsc::channel();
         let (event_tx, event_rx) = tokio::sync::mpsc::unbounded_channel();
         live.lock().control = Some(control_tx);
@@ -197,6 +215,7 @@ impl Hub {
             stored_answers,
             verify,
             models_dir: self.config.models_dir.clone(),
+            observer,
         };
         let spec = live.spec.clone();
         let spawned = std::thread::Builder::new()
@@ -316,6 +335,39 @@ impl Hub {
                 "sessions did not finish within {grace:?}; they will be marked interrupted at the next start"
             );
         }
+    }
+
+    /// `<data dir>/recordings/<id>.rrd`.
+    pub fn recording_path(&self, id: &str) -> PathBuf {
+        self.config
+            .data_dir
+            .join("recordings")
+            .join(format!("{id}.rrd"))
+    }
+
+    /// The session's Rerun recorder, unless recording is off for it and no viewer is set.
+    fn recorder(&self, live: &Live) -> anyhow::Result<Option<Box<dyn crate::session::Observer>>> {
+        let settings = live.spec.settings().map_err(anyhow::Error::msg)?;
+        let path = settings.record.then(|| self.recording_path(&live.id));
+        if let Some(dir) = path.as_ref().and_then(|p| p.parent()) {
+            std::fs::create_dir_all(dir)?;
+        }
+        let options = crate::record::RecordingOptions {
+            path,
+            connect: settings
+                .rerun_connect
+                .clone()
+                .or_else(|| self.config.rerun_connect.clone()),
+        };
+        let graph = match live.spec.run_config().map_err(anyhow::Error::msg)? {
+            crate::session::spec::RunConfig::Evaluative(c) => c.scene_graph,
+            crate::session::spec::RunConfig::Preference(c) => c.scene_graph,
+        };
+        let recorder = crate::record::Recorder::start("dualrep", &live.id, graph, &options)?;
+        Ok(
+            recorder
+                .map(|r| Box::new(recording::Recording(r)) as Box<dyn crate::session::Observer>),
+        )
     }
 
     /// Where the frames of a human session's episode are kept: `<data dir>/frames/<id>/<n>.json`.

@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 use crate::guidance::drpl::trainer::Preference;
 use crate::guidance::evaluative_run::EpisodeRecord;
 use crate::guidance::evaluative_trainer::Evaluation;
+use crate::scene_graph::AbstractState;
 use crate::sim::{Geometry, RenderState};
 
 use super::query::QueryContent;
@@ -151,6 +152,28 @@ pub enum SessionEvent {
 /// Where a session thread sends its events. `send` never blocks for long.
 pub trait SessionSink: Send + Sync {
     fn send(&self, event: SessionEvent);
+}
+
+/// Watches a session step by step on its own thread (the server's Rerun recorder implements
+/// it). Calls must be cheap: an implementation hands the data to its own thread, and flushes
+/// when dropped (the session drops it before reporting its end).
+pub trait Observer: Send {
+    /// An episode starts at `step` with this static scene.
+    fn episode_start(&mut self, episode: u64, step: u64, geometry: &Geometry);
+    /// Transition `step` (0-based) ended in `state`.
+    fn step(
+        &mut self,
+        step: u64,
+        episode: u64,
+        state: &RenderState,
+        reward: f32,
+        cumulative_return: f64,
+        abstract_state: AbstractState,
+    );
+    /// Query `seq` was asked at `step` (a replayed one too: a resumed session's recording is
+    /// whole).
+    fn query(&mut self, step: u64, seq: u64, kind: &str, text: String);
+    fn answer(&mut self, step: u64, seq: u64, value: AnswerValue);
 }
 
 /// What the async side tells a session thread.

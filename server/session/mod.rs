@@ -12,7 +12,7 @@ pub mod runner;
 pub mod spec;
 
 pub use events::{
-    AnswerValue, Checkpoint, Control, Controls, Ending, Frame, SessionEvent, SessionSink,
+    AnswerValue, Checkpoint, Control, Controls, Ending, Frame, Observer, SessionEvent, SessionSink,
 };
 pub use query::{Clip, QueryContent};
 pub use runner::{SessionContext, digest, run_session};

@@ -23,7 +23,7 @@ use crate::scene_graph::SceneGraph;
 use crate::sim::Task;
 
 use super::events::{
-    AnswerValue, Checkpoint, Controls, Ending, Frame, Halt, SessionEvent, SessionSink,
+    AnswerValue, Checkpoint, Controls, Ending, Frame, Halt, Observer, SessionEvent, SessionSink,
 };
 use super::query::{self, FrameHistory, QueryContent};
 use super::spec::{RunConfig, SessionSettings, SessionSpec, TrainerKind};
@@ -41,6 +41,8 @@ pub struct SessionContext {
     pub verify: Option<(u64, String)>,
     /// Where the synthetic trainer's experts live (`<dir>/<task>.safetensors`).
     pub models_dir: PathBuf,
+    /// Sees every step, query and answer (the recording), if any.
+    pub observer: Option<Box<dyn Observer>>,
 }
 
 /// Run the session to its end and report how it ended (also sent as `SessionEvent::Ended`).
@@ -54,12 +56,15 @@ pub fn run_session(spec: &SessionSpec, ctx: SessionContext) -> Ending {
     ending
 }
 
-fn run(spec: &SessionSpec, ctx: SessionContext) -> Result<Ending, String> {
+/// Builds the run and drives it. The observer (the recording) goes with the trainer and is
+/// dropped, and so flushed, before the session reports its end.
+fn run(spec: &SessionSpec, mut ctx: SessionContext) -> Result<Ending, String> {
+    let observer = ctx.observer.take();
     let settings = spec.settings()?;
     match spec.run_config()? {
         RunConfig::Evaluative(config) => {
             let run = EvaluativeRun::new(config, spec.budget);
-            run_evaluative(spec, settings, run, ctx)
+            run_evaluative(spec, settings, run, ctx, observer)
         }
         RunConfig::Preference(config) => {
             // As `PreferenceRun::new`, but keeping the trajectories to render clips from.
@@ -72,7 +77,7 @@ fn run(spec: &SessionSpec, ctx: SessionContext) -> Result<Ending, String> {
             );
             let pool = QueryPool::from_trajectories(config.task, &trajs, config.min_run);
             let run = PreferenceRun::with_pool(config, pool);
-            run_preference(spec, run, trajs, ctx)
+            run_preference(spec, run, trajs, ctx, observer)
         }
     }
 }
@@ -126,9 +131,22 @@ struct Asker {
     seq: u64,
     /// A halt came while a query was open: the last answer was not given by anyone.
     aborted: bool,
+    observer: Option<Box<dyn Observer>>,
 }
 
 impl Asker {
+    fn observe(&mut self, f: impl FnOnce(&mut dyn Observer)) {
+        if let Some(o) = self.observer.as_deref_mut() {
+            f(o);
+        }
+    }
+
+    /// The answer to query `seq` is known: record it.
+    fn answered(&mut self, step: u64, seq: u64, value: AnswerValue) -> AnswerValue {
+        self.observe(|o| o.answer(step, seq, value));
+        value
+    }
+
     fn replaying(&self) -> bool {
         !self.replay.is_empty()
     }
@@ -138,12 +156,15 @@ impl Asker {
         &mut self,
         step: u64,
         abstract_state: u32,
+        kind: &'static str,
+        describe: String,
         content: impl FnOnce() -> QueryContent,
     ) -> Option<AnswerValue> {
         let seq = self.seq;
         self.seq += 1;
+        self.observe(|o| o.query(step, seq, kind, describe));
         if let Some(v) = self.replay.pop_front() {
-            return Some(v);
+            return Some(self.answered(step, seq, v));
         }
         if self.controls.halted().is_some() {
             self.aborted = true;
@@ -156,7 +177,7 @@ impl Asker {
             content: Box::new(content()),
         });
         match self.controls.wait_answer(seq) {
-            Ok(v) => Some(v),
+            Ok(v) => Some(self.answered(step, seq, v)),
             Err(_) => {
                 self.aborted = true;
                 None
@@ -165,8 +186,18 @@ impl Asker {
     }
 
     /// A synthetic trainer answered the next query.
-    fn report(&mut self, step: u64, abstract_state: u32, kind: &'static str, value: AnswerValue) {
+    fn report(
+        &mut self,
+        step: u64,
+        abstract_state: u32,
+        kind: &'static str,
+        describe: String,
+        value: AnswerValue,
+    ) {
         self.replay.pop_front();
+        let seq = self.seq;
+        self.observe(|o| o.query(step, seq, kind, describe));
+        self.answered(step, seq, value);
         self.sink.send(SessionEvent::Answered {
             seq: self.seq,
             step,
@@ -186,7 +217,10 @@ enum Judge {
         graph: SceneGraph,
     },
     /// The expert oracle (EF, DREF) or nobody (SAC).
-    Synthetic(Box<dyn EvaluativeTrainer>),
+    Synthetic {
+        oracle: Box<dyn EvaluativeTrainer>,
+        graph: SceneGraph,
+    },
 }
 
 struct EvaluativeAsker {
@@ -199,20 +233,33 @@ impl EvaluativeTrainer for EvaluativeAsker {
         match &mut self.judge {
             Judge::Human { history, graph } => self
                 .asker
-                .ask(q.step, q.abstract_state.0, || QueryContent::Evaluative {
-                    clip: history.clip().expect("the history starts with the episode"),
-                    action: q.action.to_vec(),
-                    holding: graph.holding(q.abstract_state),
-                    predicted: q.predicted,
-                })
+                .ask(
+                    q.step,
+                    q.abstract_state.0,
+                    "evaluative",
+                    describe_evaluative(graph, q),
+                    || QueryContent::Evaluative {
+                        clip: history.clip().expect("the history starts with the episode"),
+                        action: q.action.to_vec(),
+                        holding: graph.holding(q.abstract_state),
+                        predicted: q.predicted,
+                    },
+                )
                 .and_then(AnswerValue::as_evaluation)
                 .unwrap_or(Evaluation::NoFeedback),
-            Judge::Synthetic(oracle) => {
+            Judge::Synthetic { oracle, graph } => {
                 let e = oracle.evaluate(q);
+                // Described only for the recording: a long synthetic run asks thousands.
+                let describe = if self.asker.observer.is_some() {
+                    describe_evaluative(graph, q)
+                } else {
+                    String::new()
+                };
                 self.asker.report(
                     q.step,
                     q.abstract_state.0,
                     "evaluative",
+                    describe,
                     AnswerValue::evaluation(e),
                 );
                 e
@@ -228,7 +275,10 @@ enum Comparer {
         graph: SceneGraph,
         trajectories: Vec<Trajectory>,
     },
-    Synthetic(SyntheticOracle),
+    Synthetic {
+        oracle: SyntheticOracle,
+        graph: SceneGraph,
+    },
 }
 
 struct PreferenceAsker {
@@ -246,21 +296,37 @@ impl PreferenceTrainer for PreferenceAsker {
                 trajectories,
             } => self
                 .asker
-                .ask(q.query as u64, state, || QueryContent::Preference {
-                    left: query::render_clip(*task, &trajectories[q.left.trajectory], q.left),
-                    right: query::render_clip(*task, &trajectories[q.right.trajectory], q.right),
-                    left_holding: query::holding(graph, q.left.abstract_state),
-                    right_holding: query::holding(graph, q.right.abstract_state),
-                    predicate: q.predicate.map(|i| graph.predicates()[i]),
-                })
+                .ask(
+                    q.query as u64,
+                    state,
+                    "preference",
+                    describe_preference(graph, q),
+                    || QueryContent::Preference {
+                        left: query::render_clip(*task, &trajectories[q.left.trajectory], q.left),
+                        right: query::render_clip(
+                            *task,
+                            &trajectories[q.right.trajectory],
+                            q.right,
+                        ),
+                        left_holding: query::holding(graph, q.left.abstract_state),
+                        right_holding: query::holding(graph, q.right.abstract_state),
+                        predicate: q.predicate.map(|i| graph.predicates()[i]),
+                    },
+                )
                 .and_then(AnswerValue::as_preference)
                 .unwrap_or(Preference::Skip),
-            Comparer::Synthetic(oracle) => {
+            Comparer::Synthetic { oracle, graph } => {
                 let p = oracle.compare(q);
+                let describe = if self.asker.observer.is_some() {
+                    describe_preference(graph, q)
+                } else {
+                    String::new()
+                };
                 self.asker.report(
                     q.query as u64,
                     state,
                     "preference",
+                    describe,
                     AnswerValue::Preference(p),
                 );
                 p
@@ -300,6 +366,7 @@ fn run_evaluative(
     settings: SessionSettings,
     mut run: EvaluativeRun,
     ctx: SessionContext,
+    observer: Option<Box<dyn Observer>>,
 ) -> Result<Ending, String> {
     let human = spec.trainer == TrainerKind::Human;
     let judge = if human {
@@ -310,14 +377,17 @@ fn run_evaluative(
             graph: run.config().scene_graph,
         }
     } else {
-        Judge::Synthetic(match run.config().method {
-            EvaluativeMethod::Sac => Box::new(Silent),
-            _ => {
-                let expert = load_expert(&ctx.models_dir, spec.task)?;
-                let act_dim = run.env().spec().action_space.dim();
-                Box::new(ExpertOracle::new(expert, act_dim, OracleRule::Authors))
-            }
-        })
+        Judge::Synthetic {
+            oracle: match run.config().method {
+                EvaluativeMethod::Sac => Box::new(Silent),
+                _ => {
+                    let expert = load_expert(&ctx.models_dir, spec.task)?;
+                    let act_dim = run.env().spec().action_space.dim();
+                    Box::new(ExpertOracle::new(expert, act_dim, OracleRule::Authors))
+                }
+            },
+            graph: run.config().scene_graph,
+        }
     };
     let sink = ctx.sink.clone();
     sink.send(SessionEvent::Started {
@@ -330,10 +400,14 @@ fn run_evaluative(
             replay: ctx.stored_answers.into(),
             seq: 0,
             aborted: false,
+            observer,
         },
         judge,
     };
 
+    if let Some(o) = trainer.asker.observer.as_deref_mut() {
+        o.episode_start(0, 0, &run.env().geometry());
+    }
     let period = Duration::from_secs_f64(1.0 / settings.pace_hz);
     let mut next_tick = Instant::now();
     let mut last_progress = Instant::now();
@@ -352,6 +426,31 @@ fn run_evaluative(
             return Ok(end_evaluative(h, &run, sink.as_ref(), true));
         }
         episode_return += f64::from(report.reward);
+        if let Some(o) = trainer.asker.observer.as_deref_mut() {
+            let step = run.steps() - 1;
+            let state = report
+                .final_state
+                .clone()
+                .unwrap_or_else(|| run.env().render());
+            // At an episode's end `run` has already counted its return.
+            let cumulative = run.cumulative_return()
+                + if report.episode.is_some() {
+                    0.0
+                } else {
+                    episode_return
+                };
+            o.step(
+                step,
+                episode,
+                &state,
+                report.reward,
+                cumulative,
+                report.abstract_state,
+            );
+            if report.episode.is_some() {
+                o.episode_start(episode + 1, run.steps(), &run.env().geometry());
+            }
+        }
         // Catching up on stored answers after a resume: no frames, no pacing.
         let live = human && !trainer.asker.replaying();
         if let Judge::Human { history, .. } = &mut trainer.judge {
@@ -447,6 +546,7 @@ fn run_preference(
     mut run: PreferenceRun,
     trajectories: Vec<Trajectory>,
     ctx: SessionContext,
+    observer: Option<Box<dyn Observer>>,
 ) -> Result<Ending, String> {
     let comparer = match spec.trainer {
         TrainerKind::Human => Comparer::Human {
@@ -454,9 +554,10 @@ fn run_preference(
             graph: run.config().scene_graph,
             trajectories,
         },
-        TrainerKind::Synthetic => {
-            Comparer::Synthetic(SyntheticOracle::new(run.theta_true().to_vec()))
-        }
+        TrainerKind::Synthetic => Comparer::Synthetic {
+            oracle: SyntheticOracle::new(run.theta_true().to_vec()),
+            graph: run.config().scene_graph,
+        },
     };
     let sink = ctx.sink.clone();
     sink.send(SessionEvent::Started {
@@ -469,6 +570,7 @@ fn run_preference(
             replay: ctx.stored_answers.into(),
             seq: 0,
             aborted: false,
+            observer,
         },
         comparer,
     };
@@ -500,4 +602,32 @@ fn run_preference(
     }
     sink.send(SessionEvent::Checkpoint(preference_checkpoint(&run)));
     Ok(Ending::Finished)
+}
+
+/// A query in words, for the recording.
+fn describe_evaluative(graph: &SceneGraph, q: &EvaluativeQuery<'_>) -> String {
+    let action: Vec<String> = q.action.iter().map(|a| format!("{a:+.2}")).collect();
+    format!(
+        "step {}: was action [{}] good? holding: {}",
+        q.step,
+        action.join(", "),
+        graph.holding(q.abstract_state).join(", ")
+    )
+}
+
+fn describe_preference(graph: &SceneGraph, q: &PreferenceQuery<'_>) -> String {
+    let differ = q
+        .predicate
+        .map(|i| format!(" (they differ in \"{}\")", graph.predicates()[i].label))
+        .unwrap_or_default();
+    format!(
+        "query {}: trajectory {} steps {}..{} or trajectory {} steps {}..{}?{differ}",
+        q.query,
+        q.left.trajectory,
+        q.left.start,
+        q.left.end,
+        q.right.trajectory,
+        q.right.start,
+        q.right.end
+    )
 }

@@ -111,12 +111,16 @@ pub struct SessionSpec {
 }
 
 /// Settings that shape the session rather than the algorithm.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SessionSettings {
     pub pace_hz: f64,
     pub answer_timeout_s: f64,
     pub checkpoint_every: u64,
     pub clip_frames: usize,
+    /// Write the session's Rerun recording (`<data dir>/recordings/<id>.rrd`); on by default.
+    pub record: bool,
+    /// Also stream to a running Rerun viewer at this URL (else the server's `--rerun-connect`).
+    pub rerun_connect: Option<String>,
 }
 
 /// The algorithm's configuration, built from the spec.
@@ -176,6 +180,21 @@ impl SessionSpec {
             checkpoint_every: number("checkpoint_every", DEFAULT_CHECKPOINT_EVERY as f64)?.round()
                 as u64,
             clip_frames: number("clip_frames", DEFAULT_CLIP_FRAMES as f64)?.round() as usize,
+            record: match self.params.get("record") {
+                None => true,
+                Some(v) => v
+                    .as_bool()
+                    .ok_or_else(|| format!("record: expected true or false, got {v}"))?,
+            },
+            rerun_connect: match self.params.get("rerun_connect") {
+                None => None,
+                Some(v) => Some(
+                    v.as_str()
+                        .filter(|s| !s.is_empty())
+                        .ok_or_else(|| format!("rerun_connect: expected a viewer URL, got {v}"))?
+                        .to_string(),
+                ),
+            },
         })
     }
 

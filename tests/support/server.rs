@@ -27,6 +27,7 @@ pub async fn state(dir: &std::path::Path) -> AppState {
             data_dir: dir.to_path_buf(),
             models_dir: root().join("models"),
             max_running: 4,
+            rerun_connect: None,
         },
     );
     AppState {
@@ -49,6 +50,7 @@ pub async fn serve(dir: &std::path::Path) -> Running {
         models_dir: root().join("models"),
         cors_origins: vec![],
         shutdown_grace_s: 30.0,
+        rerun_connect: None,
     })
     .await
     .unwrap()

@@ -1,0 +1,47 @@
+//! A session's recording: the Rerun recorder (module `record`) as the session's `Observer`.
+
+use crate::record::Recorder;
+use crate::scene_graph::AbstractState;
+use crate::session::{AnswerValue, Observer};
+use crate::sim::{Geometry, RenderState};
+
+/// Hands every step, query and answer to the recorder's logging thread; queries are numbered by
+/// their order in the session (`seq`), which the API's answers carry too.
+pub struct Recording(pub Recorder);
+
+impl Observer for Recording {
+    fn episode_start(&mut self, episode: u64, step: u64, geometry: &Geometry) {
+        self.0.episode_start(episode, step, geometry);
+    }
+
+    fn step(
+        &mut self,
+        step: u64,
+        episode: u64,
+        state: &RenderState,
+        reward: f32,
+        cumulative_return: f64,
+        abstract_state: AbstractState,
+    ) {
+        self.0.step(
+            step,
+            episode,
+            state,
+            reward,
+            cumulative_return,
+            abstract_state,
+        );
+    }
+
+    fn query(&mut self, step: u64, seq: u64, kind: &str, text: String) {
+        self.0.query(step, seq as i64, kind, text);
+    }
+
+    fn answer(&mut self, step: u64, seq: u64, value: AnswerValue) {
+        let text = format!(
+            "query {seq}: {}",
+            serde_json::to_string(&value).unwrap_or_default()
+        );
+        self.0.answer(step, seq as i64, value.as_number(), text);
+    }
+}
