@@ -13,7 +13,7 @@ use crate::guidance::drpl::run::PreferenceRun;
 use crate::guidance::drpl::trainer::{
     Preference, PreferenceQuery, PreferenceTrainer, SyntheticOracle,
 };
-use crate::guidance::drpl::trajectories::{self, Trajectory};
+use crate::guidance::drpl::trajectories::Trajectory;
 use crate::guidance::evaluative_run::EvaluativeRun;
 use crate::guidance::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
 use crate::guidance::expert_oracle::{ExpertOracle, OracleRule};
@@ -68,13 +68,7 @@ fn run(spec: &SessionSpec, mut ctx: SessionContext) -> Result<Ending, String> {
         }
         RunConfig::Preference(config) => {
             // As `PreferenceRun::new`, but keeping the trajectories to render clips from.
-            let trajs = trajectories::collect(
-                config.task,
-                &config.scene_graph,
-                config.trajectories,
-                config.max_steps,
-                &mut trajectories::rng(config.seed),
-            );
+            let trajs = PreferenceRun::record_trajectories(&config);
             let pool = QueryPool::from_trajectories(config.task, &trajs, config.min_run);
             let run = PreferenceRun::with_pool(config, pool);
             run_preference(spec, run, trajs, ctx, observer)
@@ -135,6 +129,21 @@ struct Asker {
 }
 
 impl Asker {
+    /// The session's asker, once its run is built: tells the server the session started.
+    fn start(ctx: SessionContext, observer: Option<Box<dyn Observer>>) -> Self {
+        ctx.sink.send(SessionEvent::Started {
+            replayed: ctx.stored_answers.len() as u64,
+        });
+        Self {
+            sink: ctx.sink,
+            controls: ctx.controls,
+            replay: ctx.stored_answers.into(),
+            seq: 0,
+            aborted: false,
+            observer,
+        }
+    }
+
     fn observe(&mut self, f: impl FnOnce(&mut dyn Observer)) {
         if let Some(o) = self.observer.as_deref_mut() {
             f(o);
@@ -365,7 +374,7 @@ fn run_evaluative(
     spec: &SessionSpec,
     settings: SessionSettings,
     mut run: EvaluativeRun,
-    ctx: SessionContext,
+    mut ctx: SessionContext,
     observer: Option<Box<dyn Observer>>,
 ) -> Result<Ending, String> {
     let human = spec.trainer == TrainerKind::Human;
@@ -390,18 +399,9 @@ fn run_evaluative(
         }
     };
     let sink = ctx.sink.clone();
-    sink.send(SessionEvent::Started {
-        replayed: ctx.stored_answers.len() as u64,
-    });
+    let verify = ctx.verify.take();
     let mut trainer = EvaluativeAsker {
-        asker: Asker {
-            sink: ctx.sink,
-            controls: ctx.controls,
-            replay: ctx.stored_answers.into(),
-            seq: 0,
-            aborted: false,
-            observer,
-        },
+        asker: Asker::start(ctx, observer),
         judge,
     };
 
@@ -484,7 +484,7 @@ fn run_evaluative(
             episode += 1;
             episode_return = 0.0;
         }
-        check_replay(&ctx.verify, run.steps(), || {
+        check_replay(&verify, run.steps(), || {
             digest(&run.learner().to_safetensors())
         })?;
         if settings.checkpoint_every > 0 && run.steps().is_multiple_of(settings.checkpoint_every) {
@@ -545,7 +545,7 @@ fn run_preference(
     spec: &SessionSpec,
     mut run: PreferenceRun,
     trajectories: Vec<Trajectory>,
-    ctx: SessionContext,
+    mut ctx: SessionContext,
     observer: Option<Box<dyn Observer>>,
 ) -> Result<Ending, String> {
     let comparer = match spec.trainer {
@@ -560,18 +560,9 @@ fn run_preference(
         },
     };
     let sink = ctx.sink.clone();
-    sink.send(SessionEvent::Started {
-        replayed: ctx.stored_answers.len() as u64,
-    });
+    let verify = ctx.verify.take();
     let mut trainer = PreferenceAsker {
-        asker: Asker {
-            sink: ctx.sink,
-            controls: ctx.controls,
-            replay: ctx.stored_answers.into(),
-            seq: 0,
-            aborted: false,
-            observer,
-        },
+        asker: Asker::start(ctx, observer),
         comparer,
     };
     while (run.queries() as u64) < spec.budget {
@@ -596,7 +587,7 @@ fn run_preference(
         sink.send(SessionEvent::Progress {
             progress: run.queries() as u64,
         });
-        check_replay(&ctx.verify, run.queries() as u64, || {
+        check_replay(&verify, run.queries() as u64, || {
             preference_checkpoint(&run).digest
         })?;
     }

@@ -139,15 +139,21 @@ pub struct PreferenceRun {
 impl PreferenceRun {
     /// Record the trajectories (seconds for Lunar Lander) and set up the run.
     pub fn new(config: PreferenceRunConfig) -> Self {
-        let trajs = trajectories::collect(
+        let trajs = Self::record_trajectories(&config);
+        let pool = QueryPool::from_trajectories(config.task, &trajs, config.min_run);
+        Self::with_pool(config, pool)
+    }
+
+    /// The random-policy trajectories a run with `config` draws its queries from (seconds for
+    /// Lunar Lander), reproducible from the seed.
+    pub fn record_trajectories(config: &PreferenceRunConfig) -> Vec<trajectories::Trajectory> {
+        trajectories::collect(
             config.task,
             &config.scene_graph,
             config.trajectories,
             config.max_steps,
             &mut trajectories::rng(config.seed),
-        );
-        let pool = QueryPool::from_trajectories(config.task, &trajs, config.min_run);
-        Self::with_pool(config, pool)
+        )
     }
 
     /// A run over a given pool (tests, or trajectories recorded elsewhere).
