@@ -7,11 +7,13 @@
 //! installs them). `DUALREP_SKIP_BROWSER=1` skips these tests, loudly; without it a missing
 //! browser is a failure.
 
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
+#[path = "support/binary.rs"]
+mod binary;
+
 use std::process::{Child, Command, Stdio};
 use std::sync::Mutex;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// One browser test at a time: each runs a server, a session and a Chromium.
 static SERIAL: Mutex<()> = Mutex::new(());
@@ -92,48 +94,7 @@ struct Server {
 impl Server {
     fn start() -> Server {
         let data = tempfile::tempdir().expect("a temp dir");
-        let mut child = Command::new(env!("CARGO_BIN_EXE_dualrep"))
-            .args([
-                "serve",
-                "--addr",
-                "127.0.0.1:0",
-                "--token",
-                TOKEN,
-                "--data-dir",
-            ])
-            .arg(data.path())
-            .current_dir(root())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .expect("starting dualrep serve");
-        let stdout = child.stdout.take().expect("piped stdout");
-        let (tx, rx) = std::sync::mpsc::channel();
-        std::thread::spawn(move || {
-            let mut sent = false;
-            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-                if !sent && let Some(rest) = line.split("listening on ").nth(1) {
-                    let url = rest
-                        .split_whitespace()
-                        .next()
-                        .unwrap_or_default()
-                        .to_string();
-                    let _ = tx.send(url);
-                    sent = true;
-                }
-                println!("[serve] {line}");
-            }
-        });
-        let url = rx
-            .recv_timeout(Duration::from_secs(60))
-            .unwrap_or_else(|_| {
-                let _ = child.kill();
-                panic!("dualrep serve did not print \"listening on http://ADDR\" within 60 s")
-            });
-        assert!(
-            url.starts_with("http://"),
-            "unexpected listening line: {url}"
-        );
+        let (child, url) = binary::start_serve(data.path(), TOKEN, &[], Stdio::inherit());
         Server {
             child,
             url,

@@ -3,53 +3,28 @@
 //! the session is `interrupted`, and once resumed it never re-asks an answered query and finishes.
 
 mod support {
+    pub mod binary;
     pub mod server;
     pub mod trainer;
 }
 
 use std::collections::HashMap;
-use std::io::{BufRead, BufReader};
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Stdio};
 use std::time::Duration;
 
 use serde_json::{Value, json};
 use sqlx::Row;
-use support::server::{Api, TOKEN, root};
+use support::binary::start_serve;
+use support::server::{Api, TOKEN};
 use support::trainer::{Trainer, token_of};
 
 const WAIT: Duration = Duration::from_secs(60);
 
 /// Start `dualrep serve` on a free port; returns the child and its address.
 fn start_server(data: &Path) -> (Child, std::net::SocketAddr) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_dualrep"))
-        .args([
-            "serve",
-            "--addr",
-            "127.0.0.1:0",
-            "--token",
-            TOKEN,
-            "--max-sessions",
-            "2",
-        ])
-        .arg("--data-dir")
-        .arg(data)
-        .current_dir(root())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("the binary starts");
-    let stdout = child.stdout.take().unwrap();
-    let mut lines = BufReader::new(stdout).lines();
-    let addr = loop {
-        let line = lines.next().expect("a listening line").unwrap();
-        if let Some(rest) = line.strip_prefix("dualrep listening on http://") {
-            break rest.split_whitespace().next().unwrap().parse().unwrap();
-        }
-    };
-    // Keep draining stdout so the child never blocks on a full pipe.
-    std::thread::spawn(move || for _ in lines {});
-    (child, addr)
+    let (child, url) = start_serve(data, TOKEN, &["--max-sessions", "2"], Stdio::null());
+    (child, url.trim_start_matches("http://").parse().unwrap())
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

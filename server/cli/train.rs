@@ -15,7 +15,8 @@ use super::output::publish_summary;
 use super::overrides;
 use super::progress::Progress;
 use crate::guidance::evaluative_run::{EpisodeRecord, EvaluativeRun, EvaluativeRunConfig};
-use crate::guidance::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
+use crate::guidance::evaluative_trainer::EvaluativeTrainer;
+pub use crate::guidance::evaluative_trainer::NoTrainer;
 use crate::guidance::expert_oracle::{ExpertOracle, OracleRule};
 use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::rl::Sac;
@@ -54,15 +55,6 @@ fn parse_oracle_rule(s: &str) -> Result<OracleRule, String> {
         _ => Err(format!(
             "unknown oracle rule {s:?}: expected authors or sign-aware"
         )),
-    }
-}
-
-/// The trainer of a run that never asks (plain SAC).
-pub struct NoTrainer;
-
-impl EvaluativeTrainer for NoTrainer {
-    fn evaluate(&mut self, _query: &EvaluativeQuery<'_>) -> Evaluation {
-        Evaluation::NoFeedback
     }
 }
 
@@ -106,14 +98,7 @@ pub fn resolve_config(
 
 /// Load an expert written by `dualrep expert`.
 pub fn load_expert(path: &Path, task: Task) -> anyhow::Result<Sac> {
-    let bytes = fs::read(path).with_context(|| {
-        format!(
-            "reading the expert {} (train one with `dualrep expert --task {task} --out {}`)",
-            path.display(),
-            path.display()
-        )
-    })?;
-    Sac::from_safetensors(&bytes).with_context(|| format!("loading the expert {}", path.display()))
+    crate::session::load_expert(path, task).map_err(anyhow::Error::msg)
 }
 
 /// Run `run` to `steps`, appending finished episodes to `metrics.csv` in `out`.

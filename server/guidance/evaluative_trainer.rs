@@ -57,6 +57,15 @@ pub trait EvaluativeTrainer {
     fn evaluate(&mut self, query: &EvaluativeQuery<'_>) -> Evaluation;
 }
 
+/// The trainer of a run that never asks (plain SAC): every query would get "no feedback".
+pub struct NoTrainer;
+
+impl EvaluativeTrainer for NoTrainer {
+    fn evaluate(&mut self, _query: &EvaluativeQuery<'_>) -> Evaluation {
+        Evaluation::NoFeedback
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

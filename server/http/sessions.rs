@@ -116,17 +116,7 @@ async fn view(state: &AppState, row: SessionRow) -> ApiResult<SessionView> {
     let trainer_seconds = state.store.trainer_seconds(&row.id).await?;
     let survey = state.store.survey(&row.id).await?;
     Ok(SessionView {
-        unit: if row
-            .config
-            .get("method")
-            .and_then(|m| m.as_str())
-            .and_then(|m| m.parse::<SessionMethod>().ok())
-            .is_some_and(|m| m.is_preference())
-        {
-            "queries"
-        } else {
-            "steps"
-        },
+        unit: row.spec().map_or("steps", |s| s.method.budget_unit()),
         trainer_url: trainer_url(&row),
         params: row.config.get("params").cloned().unwrap_or_default(),
         id: row.id,

@@ -102,11 +102,7 @@ impl Live {
         let kind = spec.method.query_kind();
         let progress = ProgressMessage {
             budget: spec.budget,
-            unit: if spec.method.is_preference() {
-                "queries"
-            } else {
-                "steps"
-            },
+            unit: spec.method.budget_unit(),
             ..Default::default()
         };
         Self {

@@ -133,8 +133,7 @@ impl Hub {
 
     /// Queue a stored session: wait for a slot, then run it on its own thread.
     fn start(self: &Arc<Self>, row: SessionRow) -> Result<(), HubError> {
-        let spec: SessionSpec = serde_json::from_value(row.config.clone())
-            .map_err(|e| HubError::Invalid(format!("stored config of {}: {e}", row.id)))?;
+        let spec = row.spec().map_err(HubError::Invalid)?;
         let timeout = spec.settings().map_err(HubError::Invalid)?.answer_timeout_s;
         let live = Arc::new(Live::new(
             row.id.clone(),
@@ -192,11 +191,9 @@ impl Hub {
         let verify = checkpoint
             .filter(|c| c.answers as usize <= stored_answers.len())
             .map(|c| (c.progress as u64, c.digest));
-        let observer = match self.recorder(&live) {
+        let recording = match self.recording_options(&live) {
             Ok(r) => r,
-            Err(e) => {
-                let reason = format!("the recording could not start: {e:#}");
-                tracing::error!(session = %id, "{reason}");
+            Err(reason) => {
                 let _ = self
                     .store
                     .set_status(&id, Status::Failed, Some(&reason))
@@ -215,12 +212,28 @@ impl Hub {
             stored_answers,
             verify,
             models_dir: self.config.models_dir.clone(),
-            observer,
+            observer: None,
         };
         let spec = live.spec.clone();
+        let spec_id = id.clone();
         let spawned = std::thread::Builder::new()
             .name(format!("session-{id}"))
             .spawn(move || {
+                let mut ctx = ctx;
+                // Opening the file (and a viewer connection) is blocking IO: here, not on the
+                // async runtime.
+                let (options, graph) = recording;
+                match recording::start(&spec_id, graph, &options) {
+                    Ok(observer) => ctx.observer = observer,
+                    Err(e) => {
+                        let _ = event_tx.send(crate::session::SessionEvent::Ended(
+                            crate::session::Ending::Failed(format!(
+                                "the recording could not start: {e:#}"
+                            )),
+                        ));
+                        return;
+                    }
+                }
                 let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                     run_session(&spec, ctx)
                 }));
@@ -345,29 +358,26 @@ impl Hub {
             .join(format!("{id}.rrd"))
     }
 
-    /// The session's Rerun recorder, unless recording is off for it and no viewer is set.
-    fn recorder(&self, live: &Live) -> anyhow::Result<Option<Box<dyn crate::session::Observer>>> {
-        let settings = live.spec.settings().map_err(anyhow::Error::msg)?;
-        let path = settings.record.then(|| self.recording_path(&live.id));
-        if let Some(dir) = path.as_ref().and_then(|p| p.parent()) {
-            std::fs::create_dir_all(dir)?;
-        }
+    /// Where and how a session records: its file unless recording is off, and the viewer to
+    /// stream to (its own, else the server's).
+    fn recording_options(
+        &self,
+        live: &Live,
+    ) -> Result<
+        (
+            crate::record::RecordingOptions,
+            crate::scene_graph::SceneGraph,
+        ),
+        String,
+    > {
+        let settings = live.spec.settings()?;
         let options = crate::record::RecordingOptions {
-            path,
+            path: settings.record.then(|| self.recording_path(&live.id)),
             connect: settings
                 .rerun_connect
-                .clone()
                 .or_else(|| self.config.rerun_connect.clone()),
         };
-        let graph = match live.spec.run_config().map_err(anyhow::Error::msg)? {
-            crate::session::spec::RunConfig::Evaluative(c) => c.scene_graph,
-            crate::session::spec::RunConfig::Preference(c) => c.scene_graph,
-        };
-        let recorder = crate::record::Recorder::start("dualrep", &live.id, graph, &options)?;
-        Ok(
-            recorder
-                .map(|r| Box::new(recording::Recording(r)) as Box<dyn crate::session::Observer>),
-        )
+        Ok((options, live.spec.scene_graph()?))
     }
 
     /// Where the frames of a human session's episode are kept: `<data dir>/frames/<id>/<n>.json`.

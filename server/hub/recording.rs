@@ -1,9 +1,22 @@
 //! A session's recording: the Rerun recorder (module `record`) as the session's `Observer`.
 
-use crate::record::Recorder;
-use crate::scene_graph::AbstractState;
+use crate::record::{Recorder, RecordingOptions};
+use crate::scene_graph::{AbstractState, SceneGraph};
 use crate::session::{AnswerValue, Observer};
 use crate::sim::{Geometry, RenderState};
+
+/// The session's recorder as its observer (`None` when recording is off and no viewer is set).
+pub fn start(
+    session_id: &str,
+    graph: SceneGraph,
+    options: &RecordingOptions,
+) -> anyhow::Result<Option<Box<dyn Observer>>> {
+    if let Some(dir) = options.path.as_ref().and_then(|p| p.parent()) {
+        std::fs::create_dir_all(dir)?;
+    }
+    let recorder = Recorder::start("dualrep", session_id, graph, options)?;
+    Ok(recorder.map(|r| Box::new(Recording(r)) as Box<dyn Observer>))
+}
 
 /// Hands every step, query and answer to the recorder's logging thread; queries are numbered by
 /// their order in the session (`seq`), which the API's answers carry too.

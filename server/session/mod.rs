@@ -4,13 +4,17 @@
 //! - `spec`: what a session is (task, method, trainer kind, seed, budget, parameters).
 //! - `events`: what the loop reports and the controls it obeys; answer values.
 //! - `query`: what a person is shown (clips, predicates).
+//! - `asker`: who answers: stored answers, people through the control channel, or a synthetic
+//!   trainer; the observer sees every query and answer.
 //! - `runner`: the loop: pacing, frames, asking, replaying stored answers, checkpoints.
 
+mod asker;
 pub mod events;
 pub mod query;
 pub mod runner;
 pub mod spec;
 
+pub use asker::load_expert;
 pub use events::{
     AnswerValue, Checkpoint, Control, Controls, Ending, Frame, Observer, SessionEvent, SessionSink,
 };

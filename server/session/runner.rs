@@ -3,29 +3,24 @@
 //! frames, asking people through the control channel, replaying stored answers after a resume,
 //! and checkpointing.
 
-use std::collections::VecDeque;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crate::guidance::drpl::pool::QueryPool;
 use crate::guidance::drpl::run::PreferenceRun;
-use crate::guidance::drpl::trainer::{
-    Preference, PreferenceQuery, PreferenceTrainer, SyntheticOracle,
-};
+use crate::guidance::drpl::trainer::SyntheticOracle;
 use crate::guidance::drpl::trajectories::Trajectory;
 use crate::guidance::evaluative_run::EvaluativeRun;
-use crate::guidance::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
+use crate::guidance::evaluative_trainer::NoTrainer;
 use crate::guidance::expert_oracle::{ExpertOracle, OracleRule};
 use crate::guidance::feedback_schedule::EvaluativeMethod;
-use crate::rl::Sac;
-use crate::scene_graph::SceneGraph;
-use crate::sim::Task;
 
+use super::asker::{Asker, Comparer, EvaluativeAsker, Judge, PreferenceAsker, load_expert};
 use super::events::{
     AnswerValue, Checkpoint, Controls, Ending, Frame, Halt, Observer, SessionEvent, SessionSink,
 };
-use super::query::{self, FrameHistory, QueryContent};
+use super::query::FrameHistory;
 use super::spec::{RunConfig, SessionSettings, SessionSpec, TrainerKind};
 
 /// How often a running session reports its progress.
@@ -105,254 +100,6 @@ fn check_replay(
     }
 }
 
-fn load_expert(dir: &Path, task: Task) -> Result<Sac, String> {
-    let path = dir.join(format!("{task}.safetensors"));
-    let bytes = std::fs::read(&path).map_err(|e| {
-        format!(
-            "the synthetic trainer needs an expert at {} ({e}); train one with `dualrep expert --task {task}`",
-            path.display()
-        )
-    })?;
-    Sac::from_safetensors(&bytes).map_err(|e| format!("loading the expert {}: {e}", path.display()))
-}
-
-/// Asks the session's queries: replays stored answers first, then asks people through the
-/// control channel (human sessions) or reports a synthetic trainer's answers (so they are stored).
-struct Asker {
-    sink: Arc<dyn SessionSink>,
-    controls: Controls,
-    replay: VecDeque<AnswerValue>,
-    seq: u64,
-    /// A halt came while a query was open: the last answer was not given by anyone.
-    aborted: bool,
-    observer: Option<Box<dyn Observer>>,
-}
-
-impl Asker {
-    /// The session's asker, once its run is built: tells the server the session started.
-    fn start(ctx: SessionContext, observer: Option<Box<dyn Observer>>) -> Self {
-        ctx.sink.send(SessionEvent::Started {
-            replayed: ctx.stored_answers.len() as u64,
-        });
-        Self {
-            sink: ctx.sink,
-            controls: ctx.controls,
-            replay: ctx.stored_answers.into(),
-            seq: 0,
-            aborted: false,
-            observer,
-        }
-    }
-
-    fn observe(&mut self, f: impl FnOnce(&mut dyn Observer)) {
-        if let Some(o) = self.observer.as_deref_mut() {
-            f(o);
-        }
-    }
-
-    /// The answer to query `seq` is known: record it.
-    fn answered(&mut self, step: u64, seq: u64, value: AnswerValue) -> AnswerValue {
-        self.observe(|o| o.answer(step, seq, value));
-        value
-    }
-
-    fn replaying(&self) -> bool {
-        !self.replay.is_empty()
-    }
-
-    /// A person's answer to the next query (`None` if the session halted while waiting).
-    fn ask(
-        &mut self,
-        step: u64,
-        abstract_state: u32,
-        kind: &'static str,
-        describe: String,
-        content: impl FnOnce() -> QueryContent,
-    ) -> Option<AnswerValue> {
-        let seq = self.seq;
-        self.seq += 1;
-        self.observe(|o| o.query(step, seq, kind, describe));
-        if let Some(v) = self.replay.pop_front() {
-            return Some(self.answered(step, seq, v));
-        }
-        if self.controls.halted().is_some() {
-            self.aborted = true;
-            return None;
-        }
-        self.sink.send(SessionEvent::Query {
-            seq,
-            step,
-            abstract_state,
-            content: Box::new(content()),
-        });
-        match self.controls.wait_answer(seq) {
-            Ok(v) => Some(self.answered(step, seq, v)),
-            Err(_) => {
-                self.aborted = true;
-                None
-            }
-        }
-    }
-
-    /// A synthetic trainer answered the next query.
-    fn report(
-        &mut self,
-        step: u64,
-        abstract_state: u32,
-        kind: &'static str,
-        describe: String,
-        value: AnswerValue,
-    ) {
-        self.replay.pop_front();
-        let seq = self.seq;
-        self.observe(|o| o.query(step, seq, kind, describe));
-        self.answered(step, seq, value);
-        self.sink.send(SessionEvent::Answered {
-            seq: self.seq,
-            step,
-            abstract_state,
-            kind,
-            value,
-        });
-        self.seq += 1;
-    }
-}
-
-/// Who judges an evaluative session's steps.
-enum Judge {
-    /// People: the clip of the episode so far goes with each query.
-    Human {
-        history: FrameHistory,
-        graph: SceneGraph,
-    },
-    /// The expert oracle (EF, DREF) or nobody (SAC).
-    Synthetic {
-        oracle: Box<dyn EvaluativeTrainer>,
-        graph: SceneGraph,
-    },
-}
-
-struct EvaluativeAsker {
-    asker: Asker,
-    judge: Judge,
-}
-
-impl EvaluativeTrainer for EvaluativeAsker {
-    fn evaluate(&mut self, q: &EvaluativeQuery<'_>) -> Evaluation {
-        match &mut self.judge {
-            Judge::Human { history, graph } => self
-                .asker
-                .ask(
-                    q.step,
-                    q.abstract_state.0,
-                    "evaluative",
-                    describe_evaluative(graph, q),
-                    || QueryContent::Evaluative {
-                        clip: history.clip().expect("the history starts with the episode"),
-                        action: q.action.to_vec(),
-                        holding: graph.holding(q.abstract_state),
-                        predicted: q.predicted,
-                    },
-                )
-                .and_then(AnswerValue::as_evaluation)
-                .unwrap_or(Evaluation::NoFeedback),
-            Judge::Synthetic { oracle, graph } => {
-                let e = oracle.evaluate(q);
-                // Described only for the recording: a long synthetic run asks thousands.
-                let describe = if self.asker.observer.is_some() {
-                    describe_evaluative(graph, q)
-                } else {
-                    String::new()
-                };
-                self.asker.report(
-                    q.step,
-                    q.abstract_state.0,
-                    "evaluative",
-                    describe,
-                    AnswerValue::evaluation(e),
-                );
-                e
-            }
-        }
-    }
-}
-
-/// Who compares a preference session's pairs.
-enum Comparer {
-    Human {
-        task: Task,
-        graph: SceneGraph,
-        trajectories: Vec<Trajectory>,
-    },
-    Synthetic {
-        oracle: SyntheticOracle,
-        graph: SceneGraph,
-    },
-}
-
-struct PreferenceAsker {
-    asker: Asker,
-    comparer: Comparer,
-}
-
-impl PreferenceTrainer for PreferenceAsker {
-    fn compare(&mut self, q: &PreferenceQuery<'_>) -> Preference {
-        let state = q.left.abstract_state.map_or(0, |s| s.0);
-        match &mut self.comparer {
-            Comparer::Human {
-                task,
-                graph,
-                trajectories,
-            } => self
-                .asker
-                .ask(
-                    q.query as u64,
-                    state,
-                    "preference",
-                    describe_preference(graph, q),
-                    || QueryContent::Preference {
-                        left: query::render_clip(*task, &trajectories[q.left.trajectory], q.left),
-                        right: query::render_clip(
-                            *task,
-                            &trajectories[q.right.trajectory],
-                            q.right,
-                        ),
-                        left_holding: query::holding(graph, q.left.abstract_state),
-                        right_holding: query::holding(graph, q.right.abstract_state),
-                        predicate: q.predicate.map(|i| graph.predicates()[i]),
-                    },
-                )
-                .and_then(AnswerValue::as_preference)
-                .unwrap_or(Preference::Skip),
-            Comparer::Synthetic { oracle, graph } => {
-                let p = oracle.compare(q);
-                let describe = if self.asker.observer.is_some() {
-                    describe_preference(graph, q)
-                } else {
-                    String::new()
-                };
-                self.asker.report(
-                    q.query as u64,
-                    state,
-                    "preference",
-                    describe,
-                    AnswerValue::Preference(p),
-                );
-                p
-            }
-        }
-    }
-}
-
-/// The trainer that never answers (plain SAC asks nothing).
-struct Silent;
-
-impl EvaluativeTrainer for Silent {
-    fn evaluate(&mut self, _: &EvaluativeQuery<'_>) -> Evaluation {
-        Evaluation::NoFeedback
-    }
-}
-
 fn halt_ending(h: Halt) -> Ending {
     match h {
         Halt::Stop => Ending::Stopped,
@@ -388,9 +135,12 @@ fn run_evaluative(
     } else {
         Judge::Synthetic {
             oracle: match run.config().method {
-                EvaluativeMethod::Sac => Box::new(Silent),
+                EvaluativeMethod::Sac => Box::new(NoTrainer),
                 _ => {
-                    let expert = load_expert(&ctx.models_dir, spec.task)?;
+                    let expert = load_expert(
+                        &ctx.models_dir.join(format!("{}.safetensors", spec.task)),
+                        spec.task,
+                    )?;
                     let act_dim = run.env().spec().action_space.dim();
                     Box::new(ExpertOracle::new(expert, act_dim, OracleRule::Authors))
                 }
@@ -593,32 +343,4 @@ fn run_preference(
     }
     sink.send(SessionEvent::Checkpoint(preference_checkpoint(&run)));
     Ok(Ending::Finished)
-}
-
-/// A query in words, for the recording.
-fn describe_evaluative(graph: &SceneGraph, q: &EvaluativeQuery<'_>) -> String {
-    let action: Vec<String> = q.action.iter().map(|a| format!("{a:+.2}")).collect();
-    format!(
-        "step {}: was action [{}] good? holding: {}",
-        q.step,
-        action.join(", "),
-        graph.holding(q.abstract_state).join(", ")
-    )
-}
-
-fn describe_preference(graph: &SceneGraph, q: &PreferenceQuery<'_>) -> String {
-    let differ = q
-        .predicate
-        .map(|i| format!(" (they differ in \"{}\")", graph.predicates()[i].label))
-        .unwrap_or_default();
-    format!(
-        "query {}: trajectory {} steps {}..{} or trajectory {} steps {}..{}?{differ}",
-        q.query,
-        q.left.trajectory,
-        q.left.start,
-        q.left.end,
-        q.right.trajectory,
-        q.right.start,
-        q.right.end
-    )
 }

@@ -47,6 +47,15 @@ impl SessionMethod {
         matches!(self, SessionMethod::Preference(_))
     }
 
+    /// What the budget counts: environment steps or queries.
+    pub fn budget_unit(self) -> &'static str {
+        if self.is_preference() {
+            "queries"
+        } else {
+            "steps"
+        }
+    }
+
     /// The kind of query this method asks, as the API and the database name it.
     pub fn query_kind(self) -> &'static str {
         match self {
@@ -223,6 +232,15 @@ impl SessionSpec {
                 Ok(RunConfig::Preference(config))
             }
         }
+    }
+
+    /// The scene graph the session's queries are phrased in (its `side_engines_on_a0` override
+    /// included).
+    pub fn scene_graph(&self) -> Result<crate::scene_graph::SceneGraph, String> {
+        Ok(match self.run_config()? {
+            RunConfig::Evaluative(c) => c.scene_graph,
+            RunConfig::Preference(c) => c.scene_graph,
+        })
     }
 
     /// Everything a launch must get right, checked before the session is stored.

@@ -85,6 +85,12 @@ fn json(text: &str) -> serde_json::Value {
 }
 
 impl SessionRow {
+    /// The session as launched (its `config` column).
+    pub fn spec(&self) -> std::result::Result<crate::session::SessionSpec, String> {
+        serde_json::from_value(self.config.clone())
+            .map_err(|e| format!("the stored config of session {}: {e}", self.id))
+    }
+
     fn from_row(r: &SqliteRow) -> Self {
         let status: String = r.get("status");
         Self {

@@ -72,29 +72,13 @@ fn text(s: &str) -> Message {
 }
 
 fn hello(row: &SessionRow, live: Option<&Live>, status: crate::store::Status) -> ServerMessage {
-    let task = row.task.parse().unwrap_or(crate::sim::Task::Reaching);
-    let graph = match row
-        .config
-        .get("params")
-        .and_then(|p| p.get("side_engines_on_a0"))
-    {
-        Some(v) if v.as_bool() == Some(true) || v.as_str() == Some("true") => {
-            SceneGraph::LunarLander {
-                side_engines_on_a0: true,
-            }
-        }
-        _ => SceneGraph::for_task(task),
-    };
-    let kind = live.map_or_else(
-        || {
-            if ["drpl", "drpl-ss", "fragment", "full"].contains(&row.method.as_str()) {
-                "preference"
-            } else {
-                "evaluative"
-            }
-        },
-        |l| l.kind,
-    );
+    let spec = row.spec().ok();
+    let task = spec.as_ref().map_or(crate::sim::Task::Reaching, |s| s.task);
+    let graph = spec
+        .as_ref()
+        .and_then(|s| s.scene_graph().ok())
+        .unwrap_or_else(|| SceneGraph::for_task(task));
+    let kind = spec.map_or("evaluative", |s| s.method.query_kind());
     ServerMessage::Hello {
         session: row.id.clone(),
         task,
