@@ -152,6 +152,9 @@ pub struct EvaluativeRun {
     cumulative_return: f64,
     feedback_count: u64,
     no_feedback_count: u64,
+    /// Per query, in order: the step it judged and the replay slot of that transition, so an
+    /// answer can be revised (a trainer's undo) after the run moved on.
+    queried: Vec<(u64, usize)>,
 }
 
 impl EvaluativeRun {
@@ -187,6 +190,7 @@ impl EvaluativeRun {
             cumulative_return: 0.0,
             feedback_count: 0,
             no_feedback_count: 0,
+            queried: Vec::new(),
         }
     }
 
@@ -257,7 +261,7 @@ impl EvaluativeRun {
             None
         };
 
-        self.replay.push(Transition {
+        let slot = self.replay.push(Transition {
             obs: &self.obs,
             action: &self.action,
             reward: step.reward,
@@ -265,6 +269,9 @@ impl EvaluativeRun {
             next_obs: &step.obs,
             terminated: step.terminated,
         });
+        if evaluation.is_some() {
+            self.queried.push((self.steps, slot));
+        }
         let update = self.learner.update(&self.replay);
 
         self.steps += 1;
@@ -283,6 +290,32 @@ impl EvaluativeRun {
             episode,
             final_state,
         }
+    }
+
+    /// Change the answer to query `query` (0-based, in the order asked) to `new`
+    /// (`NoFeedback` for an undone answer): the stored transition's H is relabelled, so the
+    /// human critic learns the new label from the next update on. The query rule keeps its
+    /// count (the query was asked). Returns false if the run has no such query, or its
+    /// transition has left the replay buffer.
+    pub fn relabel(&mut self, query: usize, new: Evaluation) -> bool {
+        let Some(&(step, slot)) = self.queried.get(query) else {
+            return false;
+        };
+        if self.steps - step > self.replay.capacity() as u64 {
+            return false;
+        }
+        let old = Evaluation::from_value(self.replay.human(slot) as i64);
+        self.replay.set_human(slot, new.value());
+        let old = old.unwrap_or(Evaluation::NoFeedback);
+        self.no_feedback_count = self.no_feedback_count + u64::from(new == Evaluation::NoFeedback)
+            - u64::from(old == Evaluation::NoFeedback);
+        true
+    }
+
+    /// The human label H stored with query `query`'s transition (tests and checks).
+    pub fn human_label(&self, query: usize) -> Option<f32> {
+        let &(_, slot) = self.queried.get(query)?;
+        Some(self.replay.human(slot))
     }
 
     fn finish_episode(&mut self, outcome: Outcome) -> EpisodeRecord {
@@ -437,5 +470,55 @@ mod tests {
         };
         assert_eq!(returns(1), returns(1));
         assert_ne!(returns(1), returns(2));
+    }
+
+    #[test]
+    fn an_answer_can_be_relabelled_after_the_run_moved_on() {
+        let (mut ef, trainer, _) = run(tiny(Task::Reaching, "ef-100"), 40);
+        assert_eq!(trainer.asked, 40);
+        let before = ef.human_label(10).unwrap();
+        assert_ne!(before, 0.0, "the scripted trainer always judges");
+        // Undone: "no feedback" until answered again.
+        assert!(ef.relabel(10, Evaluation::NoFeedback));
+        assert_eq!(ef.human_label(10), Some(0.0));
+        assert_eq!(ef.no_feedback_count(), 1);
+        assert!(ef.relabel(10, Evaluation::Bad));
+        assert_eq!(ef.human_label(10), Some(-1.0));
+        assert_eq!(ef.no_feedback_count(), 0);
+        // Other queries keep their labels; queries never asked cannot be relabelled.
+        assert_eq!(ef.human_label(11).map(f32::abs), Some(1.0));
+        assert!(!ef.relabel(40, Evaluation::Good));
+        // The relabelled transition is what later updates learn from: the learner diverges
+        // from a run that kept the old label.
+        let (mut kept, _, _) = run(tiny(Task::Reaching, "ef-100"), 40);
+        let mut nobody = crate::guidance::evaluative_trainer::NoTrainer;
+        let label = if before > 0.0 {
+            Evaluation::Bad
+        } else {
+            Evaluation::Good
+        };
+        ef.relabel(10, label);
+        for _ in 0..5 {
+            ef.step(&mut nobody);
+            kept.step(&mut nobody);
+        }
+        assert_ne!(
+            ef.learner().state_checksum(),
+            kept.learner().state_checksum()
+        );
+    }
+
+    #[test]
+    fn a_transition_that_left_the_replay_buffer_is_not_relabelled() {
+        let mut config = tiny(Task::Reaching, "ef-100");
+        config.sac.buffer_size = 8;
+        let (mut ef, _, _) = run(config, 20);
+        assert!(!ef.relabel(0, Evaluation::Good), "overwritten long ago");
+        assert!(ef.relabel(19, Evaluation::NoFeedback));
+        assert!(
+            ef.relabel(12, Evaluation::NoFeedback),
+            "the oldest still held"
+        );
+        assert!(!ef.relabel(11, Evaluation::NoFeedback));
     }
 }

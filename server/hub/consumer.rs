@@ -9,7 +9,7 @@ use tokio::sync::mpsc::UnboundedReceiver;
 
 use super::Hub;
 use super::live::{Live, Pending};
-use crate::session::{AnswerValue, Ending, SessionEvent};
+use crate::session::{Ending, SessionEvent};
 use crate::store::{Status, SyntheticAnswer};
 use crate::ws::protocol::{QueryMessage, ServerMessage};
 
@@ -81,7 +81,7 @@ pub(super) async fn consume(
                         s.status = Status::Waiting;
                     }
                     live.broadcast(text);
-                    spawn_timeout(hub.clone(), live.clone(), query_id, timeout);
+                    live.expire_after(store.clone(), query_id, timeout);
                 }
                 SessionEvent::Answered {
                     seq,
@@ -137,6 +137,13 @@ pub(super) async fn consume(
                         .insert_checkpoint(&id, c.progress, c.answers, &c.digest, file.as_deref())
                         .await?;
                 }
+                SessionEvent::Revised {
+                    seq,
+                    revision,
+                    progress,
+                } => {
+                    store.revision_applied(&id, seq, revision, progress).await?;
+                }
                 SessionEvent::Ended(e) => ending = e,
             }
             if batch.len() >= BATCH || (rx.is_empty() && !batch.is_empty()) {
@@ -175,12 +182,14 @@ async fn finish(hub: &Hub, live: &Arc<Live>, ending: Ending) {
         ),
         Ending::Failed(r) => (Status::Failed, Some(r)),
     };
-    let pending = {
+    let open = {
         let mut s = live.lock();
         s.status = status;
         s.reason = reason.clone();
         s.control = None;
-        s.pending.take()
+        s.undoable = None;
+        // A reopened query stays undone: its answer stands as "no feedback" (or a skip).
+        [s.pending.take(), s.reopened.take()]
     };
     let latest = serde_json::to_value(&live.lock().progress).unwrap_or_default();
     let progress = live.lock().progress.progress;
@@ -194,7 +203,7 @@ async fn finish(hub: &Hub, live: &Arc<Live>, ending: Ending) {
     {
         tracing::error!(session = %live.id, "storing the final status: {e}");
     }
-    if let Some(p) = pending {
+    for p in open.into_iter().flatten() {
         live.broadcast_message(&ServerMessage::Withdrawn {
             id: p.id,
             reason: "ended",
@@ -205,19 +214,6 @@ async fn finish(hub: &Hub, live: &Arc<Live>, ending: Ending) {
     // From here the store has the final state; connected sockets keep their `Arc` until they go.
     hub.forget(live);
     tracing::info!(session = %live.id, status = status.as_str(), "session ended");
-}
-
-/// After `timeout` an open query counts as "no feedback" (a skipped pair), committed like any
-/// answer so that exactly one answer is ever stored.
-fn spawn_timeout(hub: Arc<Hub>, live: Arc<Live>, query_id: i64, timeout: Duration) {
-    tokio::spawn(async move {
-        tokio::time::sleep(timeout).await;
-        let still_open = live.lock().pending.as_ref().map(|p| p.id) == Some(query_id);
-        if still_open {
-            let value = AnswerValue::timeout(live.kind);
-            let _ = live.answer(&hub.store, query_id, value, "timeout").await;
-        }
-    });
 }
 
 /// Frames of the episode being played, in the shape of a query clip.

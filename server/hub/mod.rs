@@ -171,12 +171,13 @@ impl Hub {
             return;
         }
         let id = live.id.clone();
-        let (stored_answers, checkpoint) = match (
+        let (stored_answers, stored_revisions, checkpoint) = match (
             self.store.replay_answers(&id).await,
+            self.store.replay_revisions(&id).await,
             self.store.latest_checkpoint(&id).await,
         ) {
-            (Ok(a), Ok(c)) => (a, c),
-            (Err(e), _) | (_, Err(e)) => {
+            (Ok(a), Ok(r), Ok(c)) => (a, r, c),
+            (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => {
                 tracing::error!(session = %id, "reading the session's answers: {e}");
                 let _ = self
                     .store
@@ -210,6 +211,7 @@ impl Hub {
             sink: Arc::new(sink::ChannelSink(event_tx.clone())),
             controls: Controls::new(control_rx),
             stored_answers,
+            stored_revisions,
             verify,
             models_dir: self.config.models_dir.clone(),
             observer: None,

@@ -57,4 +57,16 @@ impl Observer for Recording {
         );
         self.0.answer(step, seq as i64, value.as_number(), text);
     }
+
+    fn revision(&mut self, progress: u64, seq: u64, value: Option<AnswerValue>) {
+        let text = match value {
+            None => format!("query {seq}: undone"),
+            Some(v) => format!(
+                "query {seq}: answered again, {}",
+                serde_json::to_string(&v).unwrap_or_default()
+            ),
+        };
+        let number = value.map_or(0.0, AnswerValue::as_number);
+        self.0.answer(progress, seq as i64, number, text);
+    }
 }

@@ -15,7 +15,9 @@ use crate::rl::Sac;
 use crate::scene_graph::SceneGraph;
 use crate::sim::Task;
 
-use super::events::{AnswerValue, Controls, Observer, SessionEvent, SessionSink};
+use super::events::{
+    AnswerValue, Controls, Observer, Revision, SessionEvent, SessionSink, StoredRevision,
+};
 use super::query::{self, FrameHistory, QueryContent};
 use super::runner::SessionContext;
 
@@ -36,6 +38,8 @@ pub(super) struct Asker {
     pub(super) sink: Arc<dyn SessionSink>,
     pub(super) controls: Controls,
     pub(super) replay: VecDeque<AnswerValue>,
+    /// Stored revisions (undos and the answers after them), by the progress they apply at.
+    replay_revisions: VecDeque<StoredRevision>,
     pub(super) seq: u64,
     /// A halt came while a query was open: the last answer was not given by anyone.
     pub(super) aborted: bool,
@@ -52,6 +56,7 @@ impl Asker {
             sink: ctx.sink,
             controls: ctx.controls,
             replay: ctx.stored_answers.into(),
+            replay_revisions: ctx.stored_revisions.into(),
             seq: 0,
             aborted: false,
             observer,
@@ -72,6 +77,30 @@ impl Asker {
 
     pub(super) fn replaying(&self) -> bool {
         !self.replay.is_empty()
+    }
+
+    /// The revisions the learner takes in now, at `progress`, in order: stored ones where they
+    /// were first applied (those never applied once the replay is over), then those trainers
+    /// sent since the last call.
+    pub(super) fn due_revisions(&mut self, progress: u64) -> Vec<Revision> {
+        let mut due = Vec::new();
+        while let Some(r) = self.replay_revisions.front() {
+            let now = match r.applied_at {
+                Some(at) => at <= progress,
+                None => !self.replaying(),
+            };
+            if !now {
+                break;
+            }
+            due.push(r.revision);
+            self.replay_revisions.pop_front();
+        }
+        due.extend(self.controls.take_revisions());
+        for r in &due {
+            let value = r.value;
+            self.observe(|o| o.revision(progress, r.seq, value));
+        }
+        due
     }
 
     /// A person's answer to the next query (`None` if the session halted while waiting).

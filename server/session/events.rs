@@ -146,6 +146,13 @@ pub enum SessionEvent {
         progress: u64,
     },
     Checkpoint(Checkpoint),
+    /// The learner took in revision `revision` of query `seq`'s answer (an undo, or the answer
+    /// given after it) when `progress` steps or queries were done: a resume replays it there.
+    Revised {
+        seq: u64,
+        revision: u32,
+        progress: u64,
+    },
     Ended(Ending),
 }
 
@@ -174,6 +181,9 @@ pub trait Observer: Send {
     /// whole).
     fn query(&mut self, step: u64, seq: u64, kind: &str, text: String);
     fn answer(&mut self, step: u64, seq: u64, value: AnswerValue);
+    /// The answer to query `seq` was undone (`None`) or given again after an undo, taking
+    /// effect at `progress` (steps or queries done).
+    fn revision(&mut self, progress: u64, seq: u64, value: Option<AnswerValue>);
 }
 
 /// What the async side tells a session thread.
@@ -181,10 +191,32 @@ pub trait Observer: Send {
 pub enum Control {
     /// The committed answer to query `seq`.
     Answer { seq: u64, value: AnswerValue },
+    /// A trainer undid the answer to query `seq` (`value: None`) or answered it again after an
+    /// undo; committed already. The session applies it at its next step (or query).
+    Revise(Revision),
     /// Stop for good (a researcher's request).
     Stop,
     /// Checkpoint and end as interrupted (graceful shutdown); resumable.
     Shutdown,
+}
+
+/// A change to an answer the learner already used: the undo, then the new answer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Revision {
+    pub seq: u64,
+    /// 1 for the first undo, 2 for the answer after it, and so on.
+    pub revision: u32,
+    /// `None`: undone (the learner uses "no feedback" / no answer until a new one comes).
+    pub value: Option<AnswerValue>,
+}
+
+/// A revision as stored, replayed by a resumed session at the progress it was first applied.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StoredRevision {
+    pub revision: Revision,
+    /// `None`: committed but never applied (the server stopped first): applied once the replay
+    /// is over.
+    pub applied_at: Option<u64>,
 }
 
 /// Why a session must leave its loop early.
@@ -198,11 +230,23 @@ pub enum Halt {
 pub struct Controls {
     rx: Receiver<Control>,
     halt: Option<Halt>,
+    /// Revisions received and not yet applied, in the order they were committed.
+    revisions: std::collections::VecDeque<Revision>,
 }
 
 impl Controls {
     pub fn new(rx: Receiver<Control>) -> Self {
-        Self { rx, halt: None }
+        Self {
+            rx,
+            halt: None,
+            revisions: Default::default(),
+        }
+    }
+
+    /// The revisions received so far (during waits and sleeps too), oldest first.
+    pub fn take_revisions(&mut self) -> impl Iterator<Item = Revision> + '_ {
+        self.poll();
+        self.revisions.drain(..)
     }
 
     /// A stop or shutdown received so far, without waiting. Answers arriving outside a wait are
@@ -226,6 +270,7 @@ impl Controls {
             Control::Stop => self.halt = Some(Halt::Stop),
             Control::Shutdown => self.halt = Some(Halt::Shutdown),
             Control::Answer { .. } => {}
+            Control::Revise(r) => self.revisions.push_back(r),
         }
     }
 
@@ -302,8 +347,23 @@ mod tests {
         })
         .unwrap();
         assert_eq!(c.wait_answer(4), Ok(AnswerValue::Evaluation(-1)));
+        // A revision that arrives while the session waits is kept for its next step.
+        let undo = Revision {
+            seq: 2,
+            revision: 1,
+            value: None,
+        };
+        tx.send(Control::Revise(undo)).unwrap();
+        tx.send(Control::Answer {
+            seq: 5,
+            value: AnswerValue::Evaluation(0),
+        })
+        .unwrap();
+        assert_eq!(c.wait_answer(5), Ok(AnswerValue::Evaluation(0)));
+        assert_eq!(c.take_revisions().collect::<Vec<_>>(), vec![undo]);
+        assert_eq!(c.take_revisions().count(), 0);
         tx.send(Control::Stop).unwrap();
-        assert_eq!(c.wait_answer(5), Err(Halt::Stop));
+        assert_eq!(c.wait_answer(6), Err(Halt::Stop));
         drop(tx);
         assert_eq!(c.poll(), Some(Halt::Stop));
     }

@@ -9,16 +9,18 @@ use std::time::{Duration, Instant};
 
 use crate::guidance::drpl::pool::QueryPool;
 use crate::guidance::drpl::run::PreferenceRun;
+use crate::guidance::drpl::trainer::Preference;
 use crate::guidance::drpl::trainer::SyntheticOracle;
 use crate::guidance::drpl::trajectories::Trajectory;
 use crate::guidance::evaluative_run::EvaluativeRun;
-use crate::guidance::evaluative_trainer::NoTrainer;
+use crate::guidance::evaluative_trainer::{Evaluation, NoTrainer};
 use crate::guidance::expert_oracle::{ExpertOracle, OracleRule};
 use crate::guidance::feedback_schedule::EvaluativeMethod;
 
 use super::asker::{Asker, Comparer, EvaluativeAsker, Judge, PreferenceAsker, load_expert};
 use super::events::{
-    AnswerValue, Checkpoint, Controls, Ending, Frame, Halt, Observer, SessionEvent, SessionSink,
+    AnswerValue, Checkpoint, Controls, Ending, Frame, Halt, Observer, Revision, SessionEvent,
+    SessionSink, StoredRevision,
 };
 use super::query::FrameHistory;
 use super::spec::{RunConfig, SessionSettings, SessionSpec, TrainerKind};
@@ -32,6 +34,8 @@ pub struct SessionContext {
     pub controls: Controls,
     /// Answers already stored for this session, by query order: replayed, never asked again.
     pub stored_answers: Vec<AnswerValue>,
+    /// Revisions of stored answers (undos), ordered by the progress they were applied at.
+    pub stored_revisions: Vec<StoredRevision>,
     /// The latest checkpoint `(progress, digest)`: a resumed session checks its replay against it.
     pub verify: Option<(u64, String)>,
     /// Where the synthetic trainer's experts live (`<dir>/<task>.safetensors`).
@@ -100,6 +104,14 @@ fn check_replay(
     }
 }
 
+fn revised(r: Revision, progress: u64) -> SessionEvent {
+    SessionEvent::Revised {
+        seq: r.seq,
+        revision: r.revision,
+        progress,
+    }
+}
+
 fn halt_ending(h: Halt) -> Ending {
     match h {
         Halt::Stop => Ending::Stopped,
@@ -107,13 +119,18 @@ fn halt_ending(h: Halt) -> Ending {
     }
 }
 
+/// The learner's state checksum (not a hash of its safetensors bytes, whose metadata order
+/// varies from call to call).
+fn learner_digest(run: &EvaluativeRun) -> String {
+    format!("{:016x}", run.learner().state_checksum())
+}
+
 fn evaluative_checkpoint(run: &EvaluativeRun) -> Checkpoint {
-    let weights = run.learner().to_safetensors();
     Checkpoint {
         progress: run.steps(),
         answers: run.feedback_count(),
-        digest: digest(&weights),
-        weights: Some(weights),
+        digest: learner_digest(run),
+        weights: Some(run.learner().to_safetensors()),
     }
 }
 
@@ -169,6 +186,11 @@ fn run_evaluative(
     while run.steps() < spec.budget {
         if let Some(h) = trainer.asker.controls.poll() {
             return Ok(end_evaluative(h, &run, sink.as_ref(), false));
+        }
+        for r in trainer.asker.due_revisions(run.steps()) {
+            let label = r.value.and_then(AnswerValue::as_evaluation);
+            run.relabel(r.seq as usize, label.unwrap_or(Evaluation::NoFeedback));
+            sink.send(revised(r, run.steps()));
         }
         let report = run.step(&mut trainer);
         if trainer.asker.aborted {
@@ -234,9 +256,7 @@ fn run_evaluative(
             episode += 1;
             episode_return = 0.0;
         }
-        check_replay(&verify, run.steps(), || {
-            digest(&run.learner().to_safetensors())
-        })?;
+        check_replay(&verify, run.steps(), || learner_digest(&run))?;
         if settings.checkpoint_every > 0 && run.steps().is_multiple_of(settings.checkpoint_every) {
             sink.send(SessionEvent::Checkpoint(evaluative_checkpoint(&run)));
         }
@@ -321,6 +341,17 @@ fn run_preference(
                 sink.send(SessionEvent::Checkpoint(preference_checkpoint(&run)));
             }
             return Ok(halt_ending(h));
+        }
+        let progress = run.queries() as u64;
+        for r in trainer.asker.due_revisions(progress) {
+            let preference = r.value.and_then(AnswerValue::as_preference);
+            run.revise(r.seq as usize, preference.unwrap_or(Preference::Skip));
+            sink.send(revised(r, progress));
+            sink.send(SessionEvent::Alignment {
+                queries: progress,
+                alignment: run.alignment(),
+                alignment_of_mean: run.alignment_of_mean(),
+            });
         }
         let Some(report) = run.step(&mut trainer) else {
             break; // the method has no new pair left

@@ -4,6 +4,7 @@
 //!
 //! - `sessions`: launch config, status, progress.
 //! - `queries`: what was asked (kind, step, abstract state, payload) and the answers given.
+//! - `answer_revisions`: undos and the answers given after them.
 //! - `episodes`: finished episodes' metrics.
 //! - `checkpoints`: where a session was, and the learner's digest.
 //! - `surveys`: the trainer's answers to the paper's three questions.
@@ -19,6 +20,7 @@ macro_rules! now {
 mod checkpoints;
 mod episodes;
 mod queries;
+mod revisions;
 mod sessions;
 mod surveys;
 
@@ -32,6 +34,7 @@ use sqlx::sqlite::SqliteConnectOptions;
 pub use checkpoints::CheckpointRow;
 pub use episodes::EpisodeRow;
 pub use queries::{AnswerCounts, AnswerRow, CommitOutcome, QueryRow, SyntheticAnswer};
+pub use revisions::{ReanswerOutcome, UndoOutcome};
 pub use sessions::{NewSession, SessionRow, Status};
 pub use surveys::Survey;
 

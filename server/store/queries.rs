@@ -34,6 +34,8 @@ pub struct AnswerRow {
     pub asked_at: String,
     pub answered_at: String,
     pub latency_ms: i64,
+    /// How often the answer changed by an undo (0: never); `value` is the one that stands.
+    pub revision: i64,
 }
 
 /// What committing an answer did.
@@ -55,11 +57,11 @@ pub struct SyntheticAnswer {
     pub value: AnswerValue,
 }
 
-fn value_json(v: AnswerValue) -> String {
+pub(super) fn value_json(v: AnswerValue) -> String {
     serde_json::to_string(&v).expect("answer values serialise")
 }
 
-fn parse_value(text: &str) -> AnswerValue {
+pub(super) fn parse_value(text: &str) -> AnswerValue {
     serde_json::from_str(text).unwrap_or(AnswerValue::Evaluation(0))
 }
 
@@ -191,10 +193,14 @@ impl Store {
     }
 
     /// The answers a resumed session replays: by query order, up to the first query without
-    /// one.
+    /// one; an answer changed by an undo as first given (the change is replayed where it was
+    /// applied, see `replay_revisions`).
     pub async fn replay_answers(&self, session_id: &str) -> Result<Vec<AnswerValue>> {
         let rows = sqlx::query(
-            "SELECT q.seq, a.value FROM queries q LEFT JOIN answers a ON a.query_id = q.id
+            "SELECT q.seq,
+                    COALESCE((SELECT r.value FROM answer_revisions r
+                              WHERE r.query_id = q.id AND r.revision = 0), a.value) AS value
+             FROM queries q LEFT JOIN answers a ON a.query_id = q.id
              WHERE q.session_id = ? ORDER BY q.seq",
         )
         .bind(session_id)
@@ -216,7 +222,7 @@ impl Store {
     pub async fn answers(&self, session_id: &str) -> Result<Vec<AnswerRow>> {
         let rows = sqlx::query(
             "SELECT q.id, q.seq, q.kind, q.step, q.abstract_state, q.asked_at,
-                    a.value, a.who, a.answered_at, a.latency_ms
+                    a.value, a.who, a.answered_at, a.latency_ms, a.revision
              FROM answers a JOIN queries q ON q.id = a.query_id
              WHERE a.session_id = ? ORDER BY q.seq",
         )
@@ -236,6 +242,7 @@ impl Store {
                 asked_at: r.get("asked_at"),
                 answered_at: r.get("answered_at"),
                 latency_ms: r.get("latency_ms"),
+                revision: r.get("revision"),
             })
             .collect())
     }

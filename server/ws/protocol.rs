@@ -35,6 +35,11 @@ pub enum ServerMessage {
         id: i64,
         value: AnswerValue,
     },
+    /// The answer to `id` was taken back (a trainer's undo); the query follows again, open for
+    /// a new answer.
+    Undone {
+        id: i64,
+    },
     /// `id` needs no answer any more: `answered` (by another trainer), `expired`, or `ended`.
     Withdrawn {
         id: i64,

@@ -239,12 +239,13 @@ async fn handle(
                 },
             )
         }
-        ClientMessage::Undo { id } => Some(
-            ProtocolError::new(
-                "undo_unavailable",
-                "this server does not take undo yet; the answer stands",
-            )
-            .to_message(Some(id)),
-        ),
+        // On success every page gets `undone` and the query again, by broadcast.
+        ClientMessage::Undo { id } => match live.undo(&state.store, id).await {
+            Ok(reopened) => {
+                live.expire_after(state.store.clone(), id, reopened.deadline - reopened.asked);
+                None
+            }
+            Err(e) => Some(e.to_message(Some(id))),
+        },
     }
 }

@@ -1,5 +1,6 @@
 // Launch a human DREF session on Reaching from the dashboard, answer its queries in the trainer
-// page with the keys (up, space, down), and find the answers in /api/sessions/{id}/answers.
+// page with the keys (up, space, down), undo the last with U and answer it again, and find the
+// answers in /api/sessions/{id}/answers.
 
 import { api, check, nextQueryId, newPage, run, shot } from "./lib.mjs";
 
@@ -52,11 +53,27 @@ await run("dref_keys", async (browser) => {
   }
   await shot(trainer, "trainer-after-answers");
 
+  // Undo the last answer with U: the same query comes back and takes a new answer.
+  const last = asked[asked.length - 1];
+  await trainer.keyboard.press("u");
+  await trainer.waitForSelector(`#history li.undone[data-query-id="${last}"]`, { timeout: 20_000 });
+  await trainer.waitForFunction(
+    (qid) => document.querySelector("#evaluative")?.dataset.queryId === String(qid) && document.body.dataset.state === "query",
+    last,
+    { timeout: 20_000 },
+  );
+  await shot(trainer, "trainer-undone");
+  await trainer.keyboard.press("ArrowUp");
+  await trainer.waitForSelector(`#history li:not(.undone)[data-query-id="${last}"]`, { timeout: 20_000 });
+  const expected = [1, 0, 1]; // the last one as given again after the undo
+
   const answers = await api(`/api/sessions/${id}/answers`);
-  for (const [i, [, value]] of keys.entries()) {
+  for (const [i] of keys.entries()) {
     const a = answers.find((x) => x.query_id === asked[i]);
+    const value = expected[i];
     check(a, `query ${asked[i]} has a stored answer`);
-    check(a.value === value, `query ${asked[i]}: stored ${JSON.stringify(a.value)}, the key meant ${value}`);
+    check(a.value === value, `query ${asked[i]}: stored ${JSON.stringify(a.value)}, the keys meant ${value}`);
+    check(a.revision === (asked[i] === last ? 2 : 0), `query ${asked[i]}: revision ${a.revision}`);
     check(a.who === "trainer", `query ${asked[i]} was answered by the trainer (who = ${a.who})`);
     check(a.kind === "evaluative" && Number.isFinite(a.latency_ms), "answers carry kind and latency");
   }

@@ -325,7 +325,7 @@ function onError(msg) {
   const mine = page.query && msg.id === page.query.msg.id;
   switch (msg.code) {
     case "undo_unavailable":
-      notify("Undo is not available on this server: your answer stands.", { kind: "info", key: "answer" });
+      notify(`Could not undo: ${msg.message}`, { kind: "info", key: "answer" });
       return;
     case "store_failed":
     case "rate_limited":

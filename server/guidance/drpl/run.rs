@@ -134,6 +134,20 @@ pub struct PreferenceRun {
     belief: Belief,
     theta_true: Vec<f64>,
     queries: usize,
+    /// Every pair asked, in order, so an answer can be revised later (a trainer's undo).
+    asked: Vec<QueryPair>,
+    /// The query each of the belief's answers came from, in the belief's order.
+    in_belief: Vec<usize>,
+}
+
+/// What the belief learns from a preference (a skip teaches nothing).
+fn response(preference: Preference) -> Option<Response> {
+    match preference {
+        Preference::Left => Some(Response::First),
+        Preference::Right => Some(Response::Second),
+        Preference::Equal => Some(Response::Equal),
+        Preference::Skip => None,
+    }
 }
 
 impl PreferenceRun {
@@ -176,6 +190,8 @@ impl PreferenceRun {
             belief,
             theta_true,
             queries: 0,
+            asked: Vec::new(),
+            in_belief: Vec::new(),
         }
     }
 
@@ -193,20 +209,16 @@ impl PreferenceRun {
             right: &pair.right,
             predicate: pair.predicate,
         });
-        let response = match preference {
-            Preference::Left => Some(Response::First),
-            Preference::Right => Some(Response::Second),
-            Preference::Equal => Some(Response::Equal),
-            Preference::Skip => None,
-        };
-        let update_ms = response.map(|r| {
+        let update_ms = response(preference).map(|r| {
             self.belief
                 .add_answer(&pair.left.features, &pair.right.features, r);
+            self.in_belief.push(self.queries);
             let start = Instant::now();
             self.belief.update();
             start.elapsed().as_secs_f64() * 1e3
         });
         self.queries += 1;
+        self.asked.push(pair.clone());
         Some(QueryReport {
             query: self.queries,
             pair,
@@ -215,6 +227,31 @@ impl PreferenceRun {
             alignment_of_mean: self.alignment_of_mean(),
             update_ms,
         })
+    }
+
+    /// Replace the answer to query `query` (0-based) with `preference` (`Skip` for an undone
+    /// answer) and resample the posterior from the answers that now stand. Returns false, and
+    /// consumes no randomness, when nothing changed (an unknown query, or skip for skip).
+    pub fn revise(&mut self, query: usize, preference: Preference) -> bool {
+        let Some(pair) = self.asked.get(query) else {
+            return false;
+        };
+        let mut changed = false;
+        if let Some(i) = self.in_belief.iter().position(|&q| q == query) {
+            self.belief.remove_answer(i);
+            self.in_belief.remove(i);
+            changed = true;
+        }
+        if let Some(r) = response(preference) {
+            self.belief
+                .add_answer(&pair.left.features, &pair.right.features, r);
+            self.in_belief.push(query);
+            changed = true;
+        }
+        if changed {
+            self.belief.update();
+        }
+        changed
     }
 
     pub fn config(&self) -> &PreferenceRunConfig {
@@ -344,5 +381,39 @@ mod tests {
         assert_eq!((r.preference, r.update_ms), (Preference::Skip, None));
         assert_eq!(run.belief().answers(), 0);
         assert_eq!(run.queries(), 1);
+    }
+
+    #[test]
+    fn a_revised_answer_replaces_the_old_one_in_the_posterior() {
+        let config = PreferenceRunConfig::new(Task::Reaching, QueryMethod::Drpl, 9);
+        let mut run = PreferenceRun::with_pool(config, pool());
+        let mut oracle = SyntheticOracle::new(run.theta_true().to_vec());
+        for _ in 0..4 {
+            run.step(&mut oracle).expect("pairs left");
+        }
+        assert_eq!(run.belief().answers(), 4);
+        let mean = run.belief().mean();
+        // Undone: the posterior is resampled without it.
+        assert!(run.revise(1, Preference::Skip));
+        assert_eq!(run.belief().answers(), 3);
+        assert_ne!(run.belief().mean(), mean);
+        // Skip for skip changes nothing and draws nothing.
+        let undone = run.belief().mean();
+        assert!(!run.revise(1, Preference::Skip));
+        assert_eq!(run.belief().mean(), undone);
+        // Answered again, the answer joins the others.
+        assert!(run.revise(1, Preference::Equal));
+        assert_eq!(run.belief().answers(), 4);
+        assert!(!run.revise(7, Preference::Left), "query 7 was never asked");
+        assert_eq!(run.queries(), 4);
+        // The same revisions at the same points reproduce the posterior exactly (a resume).
+        let config = PreferenceRunConfig::new(Task::Reaching, QueryMethod::Drpl, 9);
+        let mut again = PreferenceRun::with_pool(config, pool());
+        for _ in 0..4 {
+            again.step(&mut oracle).expect("pairs left");
+        }
+        again.revise(1, Preference::Skip);
+        again.revise(1, Preference::Equal);
+        assert_eq!(again.belief().mean(), run.belief().mean());
     }
 }

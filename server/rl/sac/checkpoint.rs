@@ -56,9 +56,35 @@ struct RngState {
     word_pos: String,
 }
 
+/// A learner's tensors `(name, shape, f32 bytes)` and metadata, before serialisation.
+type Parts = (Vec<(String, Vec<usize>, Vec<u8>)>, BTreeMap<String, String>);
+
 impl Sac {
-    /// Everything needed to resume, as safetensors bytes.
+    /// Everything needed to resume, as safetensors bytes. The bytes of one state can differ
+    /// from call to call (safetensors writes its metadata from a `HashMap`); compare learners
+    /// with [`Sac::state_checksum`].
     pub fn to_safetensors(&self) -> Vec<u8> {
+        let (tensors, mut metadata) = self.parts();
+        let sum = checksum_of(&tensors, &metadata);
+        metadata.insert("checksum".into(), format!("{sum:016x}"));
+
+        let views = tensors.iter().map(|(name, shape, bytes)| {
+            let view = TensorView::new(Dtype::F32, shape.clone(), bytes)
+                .expect("shape and byte length agree by construction");
+            (name.as_str(), view)
+        });
+        safetensors::serialize(views, Some(metadata.into_iter().collect()))
+            .expect("serialising in-memory f32 tensors cannot fail")
+    }
+
+    /// FNV-1a over every tensor and metadata entry in a fixed order: equal exactly when two
+    /// learners would resume identically (the checkpoint's recorded checksum).
+    pub fn state_checksum(&self) -> u64 {
+        let (tensors, metadata) = self.parts();
+        checksum_of(&tensors, &metadata)
+    }
+
+    fn parts(&self) -> Parts {
         let mut tensors: Vec<(String, Vec<usize>, Vec<u8>)> = Vec::new();
         for (net_name, net) in self.networks() {
             for t in net.named_parameters() {
@@ -85,7 +111,7 @@ impl Sac {
             stream: self.rng.get_stream(),
             word_pos: self.rng.get_word_pos().to_string(),
         };
-        let mut metadata = BTreeMap::from([
+        let metadata = BTreeMap::from([
             ("format".to_string(), FORMAT.to_string()),
             ("config".to_string(), json(&self.config)),
             (
@@ -99,20 +125,7 @@ impl Sac {
             ("optimizer_steps".to_string(), json(&steps)),
             ("rng".to_string(), json(&rng)),
         ]);
-        let mut entries: Vec<(&str, &[usize], &[u8])> = tensors
-            .iter()
-            .map(|(name, shape, bytes)| (name.as_str(), &shape[..], &bytes[..]))
-            .collect();
-        let sum = checksum(&mut entries, &metadata);
-        metadata.insert("checksum".into(), format!("{sum:016x}"));
-
-        let views = tensors.iter().map(|(name, shape, bytes)| {
-            let view = TensorView::new(Dtype::F32, shape.clone(), bytes)
-                .expect("shape and byte length agree by construction");
-            (name.as_str(), view)
-        });
-        safetensors::serialize(views, Some(metadata.into_iter().collect()))
-            .expect("serialising in-memory f32 tensors cannot fail")
+        (tensors, metadata)
     }
 
     /// Read back what [`Sac::to_safetensors`] wrote. Never panics on bad bytes.
@@ -358,6 +371,17 @@ fn validate(config: &SacConfig, dims: &Dims) -> Result<(), CheckpointError> {
 }
 
 /// FNV-1a over `(name, shape, bytes)` of every tensor in name order, then every metadata entry.
+fn checksum_of(
+    tensors: &[(String, Vec<usize>, Vec<u8>)],
+    metadata: &BTreeMap<String, String>,
+) -> u64 {
+    let mut entries: Vec<(&str, &[usize], &[u8])> = tensors
+        .iter()
+        .map(|(name, shape, bytes)| (name.as_str(), &shape[..], &bytes[..]))
+        .collect();
+    checksum(&mut entries, metadata)
+}
+
 fn checksum(tensors: &mut [(&str, &[usize], &[u8])], metadata: &BTreeMap<String, String>) -> u64 {
     tensors.sort_by(|a, b| a.0.cmp(b.0));
     let mut hash = Fnv1a::default();
