@@ -168,3 +168,97 @@ async fn status_episodes_checkpoints_and_recovery(pool: SqlitePool) {
     assert_eq!(row.status, Status::Interrupted);
     assert!(row.reason.unwrap().contains("stopped"));
 }
+
+#[sqlx::test]
+async fn an_undo_reopens_an_answer_and_the_resume_replays_it_where_it_was_applied(
+    pool: SqlitePool,
+) {
+    use dualrep::session::events::{Revision, StoredRevision};
+    use dualrep::store::{ReanswerOutcome, UndoOutcome};
+    let store = store_with_session(pool, "s1").await;
+    let (good, bad) = (AnswerValue::Evaluation(1), AnswerValue::Evaluation(-1));
+    let q0 = store
+        .upsert_query("s1", 0, "evaluative", 3, 1, "{}")
+        .await
+        .unwrap();
+    let q1 = store
+        .upsert_query("s1", 1, "evaluative", 9, 1, "{}")
+        .await
+        .unwrap();
+    assert_eq!(
+        store.undo_answer(q0, "s1", "evaluative").await.unwrap(),
+        UndoOutcome::NotAnswered
+    );
+    store
+        .commit_answer(q0, "s1", good, "trainer", 50)
+        .await
+        .unwrap();
+    store
+        .commit_answer(q1, "s1", good, "trainer", 60)
+        .await
+        .unwrap();
+    // Not undone: a new answer does not replace it.
+    assert_eq!(
+        store.reanswer(q0, bad, "trainer", 10).await.unwrap(),
+        ReanswerOutcome::Stands(good)
+    );
+    assert_eq!(
+        store.undo_answer(q0, "s1", "evaluative").await.unwrap(),
+        UndoOutcome::Undone(1)
+    );
+    assert_eq!(
+        store.undo_answer(q0, "s1", "evaluative").await.unwrap(),
+        UndoOutcome::AlreadyUndone
+    );
+    // Meanwhile the answer reads as "no feedback", what the learner uses.
+    assert_eq!(
+        store.answer_value(q0).await.unwrap(),
+        Some(AnswerValue::Evaluation(0))
+    );
+    store.revision_applied("s1", 0, 1, 4).await.unwrap();
+    assert_eq!(
+        store.reanswer(q0, bad, "trainer", 700).await.unwrap(),
+        ReanswerOutcome::Committed(2)
+    );
+    assert_eq!(
+        store.reanswer(q0, good, "trainer", 800).await.unwrap(),
+        ReanswerOutcome::Stands(bad),
+        "the first new answer wins"
+    );
+    let answers = store.answers("s1").await.unwrap();
+    assert_eq!(
+        (answers[0].value, answers[0].revision, answers[0].latency_ms),
+        (bad, 2, 700)
+    );
+    assert_eq!(store.answer_counts("s1").await.unwrap().total, 2);
+    // A resume feeds the answer as first given, then the undo at 4 and the new answer (never
+    // applied: the server stopped first) once the replay is over.
+    assert_eq!(store.replay_answers("s1").await.unwrap(), vec![good, good]);
+    assert_eq!(
+        store.replay_revisions("s1").await.unwrap(),
+        vec![
+            StoredRevision {
+                revision: Revision {
+                    seq: 0,
+                    revision: 1,
+                    value: None
+                },
+                applied_at: Some(4),
+            },
+            StoredRevision {
+                revision: Revision {
+                    seq: 0,
+                    revision: 2,
+                    value: Some(bad)
+                },
+                applied_at: None,
+            },
+        ]
+    );
+    // Applied at most once: a resumed session's re-application keeps the first progress.
+    store.revision_applied("s1", 0, 1, 9).await.unwrap();
+    assert_eq!(
+        store.replay_revisions("s1").await.unwrap()[0].applied_at,
+        Some(4)
+    );
+}

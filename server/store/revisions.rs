@@ -54,36 +54,24 @@ impl Store {
         let revision: i64 = row.get("revision");
         if revision == 0 {
             // The original answer is what a resumed session feeds at the query itself.
-            sqlx::query(concat!(
-                "INSERT INTO answer_revisions
-                   (query_id, session_id, revision, value, who, latency_ms, applied_at, created_at)
-                 VALUES (?, ?, 0, ?, ?, ?, NULL, ",
-                now!(),
-                ")"
-            ))
-            .bind(query_id)
-            .bind(session_id)
-            .bind(row.get::<String, _>("value"))
-            .bind(row.get::<String, _>("who"))
-            .bind(row.get::<i64, _>("latency_ms"))
-            .execute(&mut *tx)
-            .await?;
+            let original = RevisionRow {
+                revision: 0,
+                value: Some(row.get("value")),
+                who: row.get("who"),
+                latency_ms: row.get("latency_ms"),
+            };
+            original.insert(&mut *tx, query_id, session_id).await?;
         } else if last_is_undo(&mut tx, query_id, revision).await? {
             return Ok(UndoOutcome::AlreadyUndone);
         }
         let next = revision + 1;
-        sqlx::query(concat!(
-            "INSERT INTO answer_revisions
-               (query_id, session_id, revision, value, who, latency_ms, applied_at, created_at)
-             VALUES (?, ?, ?, NULL, 'trainer', 0, NULL, ",
-            now!(),
-            ")"
-        ))
-        .bind(query_id)
-        .bind(session_id)
-        .bind(next)
-        .execute(&mut *tx)
-        .await?;
+        let undo = RevisionRow {
+            revision: next,
+            value: None,
+            who: "trainer".into(),
+            latency_ms: 0,
+        };
+        undo.insert(&mut *tx, query_id, session_id).await?;
         sqlx::query("UPDATE answers SET value = ?, revision = ? WHERE query_id = ?")
             .bind(value_json(AnswerValue::timeout(kind)))
             .bind(next)
@@ -112,21 +100,14 @@ impl Store {
             return Ok(ReanswerOutcome::Stands(parse_value(row.get("value"))));
         }
         let next = revision + 1;
-        sqlx::query(concat!(
-            "INSERT INTO answer_revisions
-               (query_id, session_id, revision, value, who, latency_ms, applied_at, created_at)
-             VALUES (?, ?, ?, ?, ?, ?, NULL, ",
-            now!(),
-            ")"
-        ))
-        .bind(query_id)
-        .bind(row.get::<String, _>("session_id"))
-        .bind(next)
-        .bind(value_json(value))
-        .bind(who)
-        .bind(latency_ms as i64)
-        .execute(&mut *tx)
-        .await?;
+        let again = RevisionRow {
+            revision: next,
+            value: Some(value_json(value)),
+            who: who.into(),
+            latency_ms: latency_ms as i64,
+        };
+        let session_id: String = row.get("session_id");
+        again.insert(&mut *tx, query_id, &session_id).await?;
         sqlx::query(concat!(
             "UPDATE answers SET value = ?, who = ?, latency_ms = ?, revision = ?, answered_at = ",
             now!(),
@@ -189,6 +170,41 @@ impl Store {
                 applied_at: r.get::<Option<i64>, _>("applied_at").map(|p| p as u64),
             })
             .collect())
+    }
+}
+
+/// One row of `answer_revisions` before it is applied.
+struct RevisionRow {
+    revision: i64,
+    /// JSON; `None` for an undo.
+    value: Option<String>,
+    who: String,
+    latency_ms: i64,
+}
+
+impl RevisionRow {
+    async fn insert(
+        &self,
+        tx: &mut sqlx::SqliteConnection,
+        query_id: i64,
+        session_id: &str,
+    ) -> Result<()> {
+        sqlx::query(concat!(
+            "INSERT INTO answer_revisions
+               (query_id, session_id, revision, value, who, latency_ms, applied_at, created_at)
+             VALUES (?, ?, ?, ?, ?, ?, NULL, ",
+            now!(),
+            ")"
+        ))
+        .bind(query_id)
+        .bind(session_id)
+        .bind(self.revision)
+        .bind(self.value.as_deref())
+        .bind(&self.who)
+        .bind(self.latency_ms)
+        .execute(tx)
+        .await?;
+        Ok(())
     }
 }
 
