@@ -60,7 +60,7 @@ impl Store {
                 who: row.get("who"),
                 latency_ms: row.get("latency_ms"),
             };
-            original.insert(&mut *tx, query_id, session_id).await?;
+            original.insert(&mut tx, query_id, session_id).await?;
         } else if last_is_undo(&mut tx, query_id, revision).await? {
             return Ok(UndoOutcome::AlreadyUndone);
         }
@@ -71,7 +71,7 @@ impl Store {
             who: "trainer".into(),
             latency_ms: 0,
         };
-        undo.insert(&mut *tx, query_id, session_id).await?;
+        undo.insert(&mut tx, query_id, session_id).await?;
         sqlx::query("UPDATE answers SET value = ?, revision = ? WHERE query_id = ?")
             .bind(value_json(AnswerValue::timeout(kind)))
             .bind(next)
@@ -107,7 +107,7 @@ impl Store {
             latency_ms: latency_ms as i64,
         };
         let session_id: String = row.get("session_id");
-        again.insert(&mut *tx, query_id, &session_id).await?;
+        again.insert(&mut tx, query_id, &session_id).await?;
         sqlx::query(concat!(
             "UPDATE answers SET value = ?, who = ?, latency_ms = ?, revision = ?, answered_at = ",
             now!(),
