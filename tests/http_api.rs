@@ -278,6 +278,28 @@ async fn a_synthetic_drpl_session_runs_to_its_end_and_exports() {
             assert!(!a[field].is_null(), "{field} missing in {a}");
         }
     }
+    // The alignment curve: one point per answered query, the last one the session's latest.
+    let curve = call(
+        &router,
+        "GET",
+        &format!("/api/sessions/{id}/alignment"),
+        Some(TOKEN),
+        None,
+    )
+    .await
+    .json();
+    let curve = curve.as_array().unwrap();
+    let queries: Vec<u64> = curve
+        .iter()
+        .map(|p| p["queries"].as_u64().unwrap())
+        .collect();
+    assert_eq!(queries, vec![1, 2, 3, 4, 5, 6]);
+    assert_eq!(curve[5]["alignment"], session["latest"]["alignment"]);
+    assert!(
+        curve
+            .iter()
+            .all(|p| p["alignment_of_mean"].as_f64().unwrap().abs() <= 1.0)
+    );
     let csv = call(
         &router,
         "GET",

@@ -57,6 +57,7 @@ pub fn app(state: AppState) -> Router {
             get(sessions::episode_frames),
         )
         .route("/api/sessions/{id}/answers", get(sessions::answers))
+        .route("/api/sessions/{id}/alignment", get(sessions::alignment))
         .route("/api/sessions/{id}/export", get(sessions::export))
         .route("/api/sessions/{id}/recording.rrd", get(recording))
         .route_layer(middleware::from_fn_with_state(

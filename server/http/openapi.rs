@@ -5,7 +5,7 @@ use axum::Json;
 use serde_json::{Value, json};
 
 /// Every documented operation as `(method, path)`; the test compares it with the router's.
-pub const OPERATIONS: [(&str, &str); 15] = [
+pub const OPERATIONS: [(&str, &str); 16] = [
     ("post", "/api/sessions"),
     ("get", "/api/sessions"),
     ("get", "/api/sessions/{id}"),
@@ -14,6 +14,7 @@ pub const OPERATIONS: [(&str, &str); 15] = [
     ("get", "/api/sessions/{id}/episodes"),
     ("get", "/api/sessions/{id}/episodes/{episode}/frames"),
     ("get", "/api/sessions/{id}/answers"),
+    ("get", "/api/sessions/{id}/alignment"),
     ("get", "/api/sessions/{id}/export"),
     ("get", "/api/sessions/{id}/recording.rrd"),
     ("post", "/api/sessions/{id}/survey"),
@@ -89,6 +90,12 @@ pub fn document() -> Value {
     paths.insert("/api/sessions/{id}/answers".into(), json!({
         "parameters": id_param(),
         "get": op("Answered queries in the order asked", true, ok("Answers", json!({"type": "array", "items": {"$ref": "#/components/schemas/Answer"}}))),
+    }));
+    paths.insert("/api/sessions/{id}/alignment".into(), json!({
+        "parameters": id_param(),
+        "get": op("A preference session's posterior alignment with the synthetic trainer's reward after every answer and undo (empty for evaluative sessions)", true, ok("Alignment by query", json!({"type": "array", "items": {"type": "object", "properties": {
+            "queries": {"type": "integer"}, "alignment": {"type": "number"}, "alignment_of_mean": {"type": "number"}
+        }}}))),
     }));
     paths.insert("/api/sessions/{id}/export".into(), json!({
         "parameters": [id_param()[0].clone(), {"name": "format", "in": "query", "schema": {"type": "string", "enum": ["jsonl", "csv"], "default": "jsonl"}}],
@@ -182,7 +189,8 @@ pub fn document() -> Value {
                     "step": {"type": "integer"}, "abstract_state": {"type": "integer"},
                     "value": {"oneOf": [{"type": "integer", "enum": [1, 0, -1]}, {"type": "string", "enum": ["left", "right", "equal", "skip"]}]},
                     "who": {"type": "string", "enum": ["trainer", "synthetic", "timeout"]},
-                    "asked_at": {"type": "string"}, "answered_at": {"type": "string"}, "latency_ms": {"type": "integer"}
+                    "asked_at": {"type": "string"}, "answered_at": {"type": "string"}, "latency_ms": {"type": "integer"},
+                    "revision": {"type": "integer", "description": "how often an undo changed the answer (0: never); `value` is the answer that stands"}
                 }},
                 "Episode": {"type": "object", "properties": {
                     "episode": {"type": "integer"}, "step": {"type": "integer"}, "return": {"type": "number"}, "length": {"type": "integer"},

@@ -216,6 +216,16 @@ pub async fn answers(State(state): State<AppState>, Path(id): Path<String>) -> A
     Ok(Json(state.store.answers(&id).await?).into_response())
 }
 
+/// `GET .../alignment`: a preference session's posterior alignment after every answer (and
+/// after every undo), oldest first.
+pub async fn alignment(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+) -> ApiResult<Response> {
+    row(&state, &id).await?;
+    Ok(Json(state.store.alignment(&id).await?).into_response())
+}
+
 #[derive(Debug, Deserialize)]
 pub struct ExportQuery {
     pub format: Option<String>,
@@ -273,6 +283,7 @@ pub async fn export(
                 "asked_at",
                 "answered_at",
                 "latency_ms",
+                "revision",
             ])
             .map_err(io)?;
             for a in &answers {
@@ -288,6 +299,7 @@ pub async fn export(
                     a.asked_at.clone(),
                     a.answered_at.clone(),
                     a.latency_ms.to_string(),
+                    a.revision.to_string(),
                 ])
                 .map_err(io)?;
             }

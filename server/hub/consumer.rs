@@ -9,8 +9,8 @@ use tokio::sync::mpsc::UnboundedReceiver;
 
 use super::Hub;
 use super::live::{Live, Pending};
-use crate::session::{Ending, SessionEvent};
-use crate::store::{Status, SyntheticAnswer};
+use crate::session::{Ending, SessionEvent, TrainerKind};
+use crate::store::{AlignmentRow, Status, SyntheticAnswer};
 use crate::ws::protocol::{QueryMessage, ServerMessage};
 
 /// Synthetic answers stored per transaction at most.
@@ -109,8 +109,21 @@ pub(super) async fn consume(
                     live.lock().progress.feedback_fraction = e.feedback_fraction;
                     live.broadcast_message(&live.progress_message());
                 }
-                SessionEvent::Alignment { alignment, .. } => {
-                    live.lock().progress.alignment = Some(alignment);
+                SessionEvent::Alignment {
+                    queries,
+                    alignment,
+                    alignment_of_mean,
+                } => {
+                    // Against the synthetic trainer's theta: meaningless for people.
+                    if live.spec.trainer == TrainerKind::Synthetic {
+                        live.lock().progress.alignment = Some(alignment);
+                        let row = AlignmentRow {
+                            queries: queries as i64,
+                            alignment,
+                            alignment_of_mean,
+                        };
+                        store.record_alignment(&id, row).await?;
+                    }
                 }
                 SessionEvent::Progress { progress } => {
                     live.lock().progress.progress = progress;

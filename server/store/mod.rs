@@ -8,6 +8,7 @@
 //! - `episodes`: finished episodes' metrics.
 //! - `checkpoints`: where a session was, and the learner's digest.
 //! - `surveys`: the trainer's answers to the paper's three questions.
+//! - `alignments`: a preference session's alignment after every answer.
 
 /// The current time as the RFC 3339 text every table stores (UTC, milliseconds), as a literal
 /// for `concat!`: sqlx takes only static SQL.
@@ -17,6 +18,7 @@ macro_rules! now {
     };
 }
 
+mod alignments;
 mod checkpoints;
 mod episodes;
 mod queries;
@@ -31,6 +33,7 @@ use std::time::Duration;
 use sqlx::SqlitePool;
 use sqlx::sqlite::SqliteConnectOptions;
 
+pub use alignments::AlignmentRow;
 pub use checkpoints::CheckpointRow;
 pub use episodes::EpisodeRow;
 pub use queries::{AnswerCounts, AnswerRow, CommitOutcome, QueryRow, SyntheticAnswer};

@@ -13,7 +13,6 @@ const state = {
   tasks: null,
   sessions: [],
   selected: null,
-  alignment: new Map(), // session id -> [[progress, alignment]] seen while polling
   pollTimer: null,
 };
 
@@ -254,14 +253,6 @@ async function refresh() {
     notify(`The sessions could not be loaded: ${e.message}`, { kind: "error", key: "poll" });
     return;
   }
-  for (const s of state.sessions) {
-    const a = s.latest?.alignment;
-    if (typeof a === "number") {
-      const series = state.alignment.get(s.id) ?? [];
-      if (!series.length || series[series.length - 1][0] !== s.progress) series.push([s.progress, a]);
-      state.alignment.set(s.id, series);
-    }
-  }
   render();
   await showDetail();
 }
@@ -300,7 +291,17 @@ async function showDetail() {
   linePlot($("plot-reward"), [{ label: `${s.method}${fb}`, points: episodes.map((e) => [e.step, e.cumulative_return]) }], { xLabel: "steps", height: 160, empty: pref ? "preference sessions have no episodes" : "no finished episode yet" });
   linePlot($("plot-returns"), [{ points: episodes.map((e) => [e.episode, e.return]) }], { xLabel: "episode", height: 160, empty: pref ? "preference sessions have no episodes" : "no finished episode yet" });
   if (pref) {
-    linePlot($("plot-alignment"), [{ label: "alignment", points: state.alignment.get(s.id) ?? [] }], { xLabel: "queries", yMin: -1, yMax: 1, height: 160, empty: "alignment is reported for synthetic trainers" });
+    let curve = [];
+    try {
+      curve = await getJson(`/api/sessions/${s.id}/alignment`);
+    } catch (e) {
+      notify(`The alignment could not be loaded: ${e.message}`, { kind: "error", key: "alignment" });
+    }
+    const series = [
+      { label: "alignment", points: curve.map((p) => [p.queries, p.alignment]) },
+      { label: "of the mean", points: curve.map((p) => [p.queries, p.alignment_of_mean]) },
+    ];
+    linePlot($("plot-alignment"), curve.length ? series : [], { xLabel: "queries", yMin: -1, yMax: 1, height: 160, empty: "alignment is reported for synthetic trainers" });
   }
 }
 

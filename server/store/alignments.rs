@@ -1,0 +1,52 @@
+//! The `alignments` table: a preference session's alignment curve (the dashboard's plot, and
+//! Figure 5's measure for a session).
+
+use serde::Serialize;
+use sqlx::Row;
+
+use super::{Result, Store};
+
+/// The posterior after `queries` queries.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct AlignmentRow {
+    pub queries: i64,
+    pub alignment: f64,
+    pub alignment_of_mean: f64,
+}
+
+impl Store {
+    /// Store the alignment after `queries` queries (replacing an earlier one at the same count:
+    /// an undo changes the posterior without a new query).
+    pub async fn record_alignment(&self, session_id: &str, a: AlignmentRow) -> Result<()> {
+        sqlx::query(
+            "INSERT OR REPLACE INTO alignments (session_id, queries, alignment, alignment_of_mean)
+             VALUES (?, ?, ?, ?)",
+        )
+        .bind(session_id)
+        .bind(a.queries)
+        .bind(a.alignment)
+        .bind(a.alignment_of_mean)
+        .execute(self.writer())
+        .await?;
+        Ok(())
+    }
+
+    /// The curve, by query count.
+    pub async fn alignment(&self, session_id: &str) -> Result<Vec<AlignmentRow>> {
+        let rows = sqlx::query(
+            "SELECT queries, alignment, alignment_of_mean FROM alignments
+             WHERE session_id = ? ORDER BY queries",
+        )
+        .bind(session_id)
+        .fetch_all(self.pool())
+        .await?;
+        Ok(rows
+            .iter()
+            .map(|r| AlignmentRow {
+                queries: r.get("queries"),
+                alignment: r.get("alignment"),
+                alignment_of_mean: r.get("alignment_of_mean"),
+            })
+            .collect())
+    }
+}
