@@ -2,7 +2,7 @@
 // page with the keys (up, space, down), undo the last with U and answer it again, and find the
 // answers in /api/sessions/{id}/answers.
 
-import { api, check, nextQueryId, newPage, run, shot } from "./lib.mjs";
+import { api, check, nextQueryId, newPage, run, shot, waitFor } from "./lib.mjs";
 
 await run("dref_keys", async (browser) => {
   const page = await newPage(browser, { token: null });
@@ -85,6 +85,17 @@ await run("dref_keys", async (browser) => {
   await page.click(`#sessions tr[data-id="${id}"] td`);
   await page.waitForSelector("#detail:not(.hidden)");
   await shot(page, "dashboard-sessions");
+  // A synthetic DRPL session's alignment curve, whole, on the dashboard.
+  const pref = await api("/api/sessions", {
+    method: "POST",
+    body: { task: "reaching", method: "drpl", trainer: "synthetic", seed: 2, queries: 8, params: { trajectories: 12 } },
+  });
+  await waitFor("the DRPL session to finish", async () => (await api(`/api/sessions/${pref.id}`)).status === "finished");
+  await page.waitForSelector(`#sessions tr[data-id="${pref.id}"] td`);
+  await page.click(`#sessions tr[data-id="${pref.id}"] td`);
+  await page.waitForFunction(() => document.querySelectorAll("#plot-alignment svg polyline, #plot-alignment svg path").length >= 2, null, { timeout: 15_000 });
+  await shot(page, "dashboard-alignment");
+  await page.click(`#sessions tr[data-id="${id}"] td`);
   await api(`/api/sessions/${id}/stop`, { method: "POST" });
   await page.waitForSelector(`#sessions tr[data-id="${id}"] .pill.stopped`, { timeout: 15_000 });
   trainer.assertNoErrors();
