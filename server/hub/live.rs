@@ -1,8 +1,7 @@
 //! One running (or recently ended) session as the async side sees it: the pending query, the
 //! broadcast to watching browsers, and the answer path. An answer is forwarded to the session
 //! thread and acknowledged only after the store committed it; the first committed answer wins.
-//! A trainer may undo the latest answer for [`UNDO_WINDOW`]: the undo commits, the session's
-//! learner drops the answer, and the query opens again for a new one.
+//! A trainer may undo the latest answer (module `undo`).
 
 use std::sync::mpsc::Sender;
 use std::sync::{Arc, Mutex};
@@ -10,10 +9,11 @@ use std::time::Instant;
 
 use tokio::sync::broadcast;
 
-use crate::session::events::Revision;
 use crate::session::{AnswerValue, Control, SessionSpec};
 use crate::sim::Geometry;
-use crate::store::{CommitOutcome, ReanswerOutcome, Status, Store, UndoOutcome};
+use crate::store::{CommitOutcome, Status, Store};
+
+use super::undo::Undoable;
 use crate::ws::protocol::{ProgressMessage, ProtocolError, ServerMessage};
 
 /// Messages kept for a browser that falls behind before it must catch up from `hello`.
@@ -60,17 +60,6 @@ impl Pending {
 /// Answers kept in memory after their query closed, so repeats need no database read.
 const RECENT_ANSWERS: usize = 256;
 
-/// How long after it was given an answer can be undone (the trainer page offers 6 s; the rest
-/// is slack for a slow network).
-pub const UNDO_WINDOW: std::time::Duration = std::time::Duration::from_secs(30);
-
-/// The latest answer a trainer gave, while it can still be undone.
-#[derive(Clone, Debug)]
-pub struct Undoable {
-    pub query: Pending,
-    pub at: Instant,
-}
-
 /// What browsers need to (re)join.
 #[derive(Debug)]
 pub struct LiveState {
@@ -94,7 +83,7 @@ pub struct LiveState {
 impl LiveState {
     /// A committed answer to `query`: counted, kept for repeats, and undoable if a trainer
     /// gave it.
-    fn remember(&mut self, query: &Pending, value: AnswerValue, reason: &str) {
+    pub(super) fn remember(&mut self, query: &Pending, value: AnswerValue, reason: &str) {
         self.progress.answered += 1;
         if self.recent.len() == RECENT_ANSWERS {
             self.recent.pop_front();
@@ -321,64 +310,6 @@ impl Live {
         });
     }
 
-    /// Answer a query reopened by an undo: committed as the answer's next revision, then the
-    /// session relabels (or re-adds) it.
-    async fn reanswer(
-        &self,
-        store: &Store,
-        reopened: &Pending,
-        value: AnswerValue,
-        who: &str,
-    ) -> AnswerReply {
-        let id = reopened.id;
-        let mut committed = reopened.commit.lock().await;
-        if let Some(stored) = *committed {
-            return self.repeat(id, value, stored);
-        }
-        let latency_ms = reopened.asked.elapsed().as_millis() as u64;
-        let revision = match store.reanswer(id, value, who, latency_ms).await {
-            Ok(ReanswerOutcome::Committed(r)) => r,
-            Ok(ReanswerOutcome::Stands(stored)) => {
-                *committed = Some(stored);
-                return self.repeat(id, value, stored);
-            }
-            Err(e) => {
-                tracing::error!(session = %self.id, query = id, "storing an answer again failed: {e}");
-                return AnswerReply::Refused(ProtocolError::new(
-                    "store_failed",
-                    "the answer could not be stored; try again",
-                ));
-            }
-        };
-        *committed = Some(value);
-        let reason = if who == "timeout" {
-            "expired"
-        } else {
-            "answered"
-        };
-        let still_pending = {
-            let mut s = self.lock();
-            if s.reopened.as_ref().map(|p| p.id) == Some(id) {
-                s.reopened = None;
-            }
-            s.remember(reopened, value, reason);
-            if let Some(control) = &s.control {
-                let _ = control.send(Control::Revise(Revision {
-                    seq: reopened.seq,
-                    revision,
-                    value: Some(value),
-                }));
-            }
-            s.pending.as_ref().map(|p| p.text.clone())
-        };
-        self.broadcast_message(&ServerMessage::Withdrawn { id, reason });
-        // The query the session waits on comes back to pages that showed the reopened one.
-        if let Some(text) = still_pending {
-            self.broadcast(text);
-        }
-        AnswerReply::Ack(value)
-    }
-
     /// After `timeout` an open query (pending or reopened) counts as "no feedback" (a skipped
     /// pair), committed like any answer so that exactly one answer stands.
     pub fn expire_after(
@@ -403,77 +334,7 @@ impl Live {
         });
     }
 
-    /// Take back the answer to `id`: allowed for the latest answer a trainer gave, within
-    /// [`UNDO_WINDOW`], while the session runs. Returns the reopened query (for its timeout);
-    /// every browser gets `undone` and the query again.
-    pub async fn undo(&self, store: &Store, id: i64) -> Result<Pending, ProtocolError> {
-        let unavailable = |message: String| ProtocolError::new("undo_unavailable", message);
-        // Taken out while the undo commits, so two trainers cannot undo the same answer twice.
-        let undoable = {
-            let mut s = self.lock();
-            if !s.status.is_active() {
-                return Err(unavailable(
-                    "the session is not running; the answer stands".into(),
-                ));
-            }
-            match s.undoable.take() {
-                Some(u) if u.query.id == id && u.at.elapsed() <= UNDO_WINDOW => u,
-                Some(u) if u.query.id == id => {
-                    return Err(unavailable(format!(
-                        "answers can be undone for {} s; this one stands",
-                        UNDO_WINDOW.as_secs()
-                    )));
-                }
-                other => {
-                    s.undoable = other;
-                    return Err(unavailable(format!(
-                        "only the latest answer a trainer gave can be undone; query {id}'s stands"
-                    )));
-                }
-            }
-        };
-        let q = &undoable.query;
-        let revision = match store.undo_answer(id, &self.id, q.kind).await {
-            Ok(UndoOutcome::Undone(r)) => r,
-            Ok(UndoOutcome::NotAnswered | UndoOutcome::AlreadyUndone) => {
-                return Err(unavailable(format!("query {id} has no answer to undo")));
-            }
-            Err(e) => {
-                tracing::error!(session = %self.id, query = id, "storing an undo failed: {e}");
-                self.lock().undoable.get_or_insert(undoable);
-                return Err(ProtocolError::new(
-                    "store_failed",
-                    "the undo could not be stored; the answer stands; try again",
-                ));
-            }
-        };
-        let reopened = Pending::new(
-            id,
-            q.seq,
-            q.kind,
-            q.text.clone(),
-            Instant::now(),
-            self.answer_timeout,
-        );
-        {
-            let mut s = self.lock();
-            s.progress.answered = s.progress.answered.saturating_sub(1);
-            s.recent.retain(|(q, _)| *q != id);
-            s.reopened = Some(reopened.clone());
-            if let Some(control) = &s.control {
-                let _ = control.send(Control::Revise(Revision {
-                    seq: q.seq,
-                    revision,
-                    value: None,
-                }));
-            }
-        }
-        self.broadcast_message(&ServerMessage::Undone { id });
-        self.broadcast(reopened.text.clone());
-        Ok(reopened)
-    }
-
-    fn repeat(&self, id: i64, value: AnswerValue, stored: AnswerValue) -> AnswerReply {
+    pub(super) fn repeat(&self, id: i64, value: AnswerValue, stored: AnswerValue) -> AnswerReply {
         if stored == value {
             AnswerReply::Ack(value)
         } else {

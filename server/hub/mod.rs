@@ -6,11 +6,13 @@
 //! - `consumer`: applies a session's events to the store and the browsers.
 //! - `sink`: the channel a session thread reports into.
 //! - `recording`: the session's Rerun recording as its observer.
+//! - `undo`: taking back an answer and answering the query again.
 
 mod consumer;
 pub mod live;
 mod recording;
 mod sink;
+pub mod undo;
 
 use std::collections::HashMap;
 use std::path::PathBuf;

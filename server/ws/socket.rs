@@ -241,10 +241,7 @@ async fn handle(
         }
         // On success every page gets `undone` and the query again, by broadcast.
         ClientMessage::Undo { id } => match live.undo(&state.store, id).await {
-            Ok(reopened) => {
-                live.expire_after(state.store.clone(), id, reopened.deadline - reopened.asked);
-                None
-            }
+            Ok(()) => None,
             Err(e) => Some(e.to_message(Some(id))),
         },
     }

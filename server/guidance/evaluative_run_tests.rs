@@ -1,0 +1,150 @@
+//! Tests of `evaluative_run`: what is asked, episodes, seeds, relabelling.
+
+use super::*;
+
+/// Answers +1 when the action's first component is positive; counts the questions.
+struct Scripted {
+    asked: u64,
+    last_step: Option<u64>,
+}
+
+impl EvaluativeTrainer for Scripted {
+    fn evaluate(&mut self, q: &EvaluativeQuery<'_>) -> Evaluation {
+        self.asked += 1;
+        assert!(
+            self.last_step.is_none_or(|s| q.step > s),
+            "steps are asked in order"
+        );
+        self.last_step = Some(q.step);
+        if q.action[0] > 0.0 {
+            Evaluation::Good
+        } else {
+            Evaluation::Bad
+        }
+    }
+}
+
+fn tiny(task: Task, method: &str) -> EvaluativeRunConfig {
+    let mut config = EvaluativeRunConfig::new(task, method.parse().unwrap(), 3);
+    config.sac.hidden = vec![8, 8];
+    config.sac.batch_size = 16;
+    config
+}
+
+fn run(config: EvaluativeRunConfig, steps: u64) -> (EvaluativeRun, Scripted, Vec<EpisodeRecord>) {
+    let mut run = EvaluativeRun::new(config, steps);
+    let mut trainer = Scripted {
+        asked: 0,
+        last_step: None,
+    };
+    let mut episodes = Vec::new();
+    while run.steps() < steps {
+        if let Some(e) = run.step(&mut trainer).episode {
+            episodes.push(e);
+        }
+    }
+    (run, trainer, episodes)
+}
+
+#[test]
+fn sac_never_asks_and_ef_100_asks_every_step() {
+    let (sac, trainer, _) = run(tiny(Task::Reaching, "sac"), 50);
+    assert_eq!((sac.feedback_count(), trainer.asked), (0, 0));
+    assert!(sac.config().sac.human_critic.is_none());
+    let (ef, trainer, _) = run(tiny(Task::Reaching, "ef-100"), 50);
+    assert_eq!((ef.feedback_count(), trainer.asked), (50, 50));
+    assert_eq!(ef.learner().updates(), 50);
+}
+
+#[test]
+fn dref_asks_at_the_first_step_and_counts_every_answer() {
+    // While fewer than k + 1 abstract states have feedback, every state ranks in the top
+    // k + 1 and DREF asks; which steps it skips later is the query rule's (tested there).
+    let (dref, trainer, _) = run(tiny(Task::Reaching, "dref"), 100);
+    assert_eq!(
+        trainer.last_step.map(|_| trainer.asked),
+        Some(dref.feedback_count())
+    );
+    assert!(dref.feedback_count() >= 1);
+    assert!(dref.config().sac.human_critic.is_some());
+}
+
+#[test]
+fn episodes_are_counted_cumulatively_and_the_env_resets() {
+    // Lunar Lander episodes end within a few hundred steps under an untrained policy.
+    let (run, _, episodes) = run(tiny(Task::LunarLander, "sac"), 400);
+    assert!(!episodes.is_empty());
+    let mut cumulative = 0.0;
+    for (i, e) in episodes.iter().enumerate() {
+        cumulative += e.episode_return;
+        assert_eq!(e.episode, i as u64);
+        assert!((e.cumulative_return - cumulative).abs() < 1e-9);
+        assert!(e.step <= run.steps());
+    }
+    assert_eq!(run.episodes(), episodes.len() as u64);
+}
+
+#[test]
+fn a_run_is_reproducible_from_its_seed() {
+    let returns = |seed| {
+        let mut config = tiny(Task::LunarLander, "ef-50");
+        config.seed = seed;
+        run(config, 200)
+            .2
+            .iter()
+            .map(|e| e.episode_return)
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(returns(1), returns(1));
+    assert_ne!(returns(1), returns(2));
+}
+
+#[test]
+fn an_answer_can_be_relabelled_after_the_run_moved_on() {
+    let (mut ef, trainer, _) = run(tiny(Task::Reaching, "ef-100"), 40);
+    assert_eq!(trainer.asked, 40);
+    let before = ef.human_label(10).unwrap();
+    assert_ne!(before, 0.0, "the scripted trainer always judges");
+    // Undone: "no feedback" until answered again.
+    assert!(ef.relabel(10, Evaluation::NoFeedback));
+    assert_eq!(ef.human_label(10), Some(0.0));
+    assert_eq!(ef.no_feedback_count(), 1);
+    assert!(ef.relabel(10, Evaluation::Bad));
+    assert_eq!(ef.human_label(10), Some(-1.0));
+    assert_eq!(ef.no_feedback_count(), 0);
+    // Other queries keep their labels; queries never asked cannot be relabelled.
+    assert_eq!(ef.human_label(11).map(f32::abs), Some(1.0));
+    assert!(!ef.relabel(40, Evaluation::Good));
+    // The relabelled transition is what later updates learn from: the learner diverges
+    // from a run that kept the old label.
+    let (mut kept, _, _) = run(tiny(Task::Reaching, "ef-100"), 40);
+    let mut nobody = crate::guidance::evaluative_trainer::NoTrainer;
+    let label = if before > 0.0 {
+        Evaluation::Bad
+    } else {
+        Evaluation::Good
+    };
+    ef.relabel(10, label);
+    for _ in 0..5 {
+        ef.step(&mut nobody);
+        kept.step(&mut nobody);
+    }
+    assert_ne!(
+        ef.learner().state_checksum(),
+        kept.learner().state_checksum()
+    );
+}
+
+#[test]
+fn a_transition_that_left_the_replay_buffer_is_not_relabelled() {
+    let mut config = tiny(Task::Reaching, "ef-100");
+    config.sac.buffer_size = 8;
+    let (mut ef, _, _) = run(config, 20);
+    assert!(!ef.relabel(0, Evaluation::Good), "overwritten long ago");
+    assert!(ef.relabel(19, Evaluation::NoFeedback));
+    assert!(
+        ef.relabel(12, Evaluation::NoFeedback),
+        "the oldest still held"
+    );
+    assert!(!ef.relabel(11, Evaluation::NoFeedback));
+}
