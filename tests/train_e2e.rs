@@ -88,6 +88,51 @@ fn an_expert_trains_and_drives_dref_and_ef_runs() {
 }
 
 #[test]
+fn periodic_checks_ship_the_best_policy_without_changing_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let expert = |out: &str, extra: &[&str]| {
+        let mut args = vec![
+            "expert",
+            "--task",
+            "reaching",
+            "--steps",
+            "300",
+            "--seed",
+            "3",
+            "--eval-episodes",
+            "2",
+            "--out",
+            out,
+        ];
+        args.extend(TINY);
+        args.extend(extra);
+        ok(&dualrep(&args, d))
+    };
+    let plain = expert("plain/reaching.safetensors", &[]);
+    let checked = expert("checked/reaching.safetensors", &["--eval-every", "100"]);
+
+    // The checks evaluate a copy of the learner: the training run itself is the same run.
+    let metrics = |dir: &str| {
+        std::fs::read_to_string(d.join(dir).join("reaching.train/metrics.csv")).unwrap()
+    };
+    assert_eq!(metrics("plain"), metrics("checked"));
+    assert_eq!(plain["final_mean_return"], checked["final_mean_return"]);
+    assert!(plain.get("checks").is_none() && plain.get("shipped_step").is_none());
+
+    let checks = checked["checks"].as_array().unwrap();
+    let steps: Vec<u64> = checks.iter().map(|c| c["step"].as_u64().unwrap()).collect();
+    assert_eq!(steps, [100, 200, 300]);
+    let returns: Vec<f64> = checks
+        .iter()
+        .map(|c| c["mean_return"].as_f64().unwrap())
+        .collect();
+    let best = returns.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    let first_best = steps[returns.iter().position(|r| *r == best).unwrap()];
+    assert_eq!(checked["shipped_step"], first_best);
+}
+
+#[test]
 fn bad_input_is_refused_with_a_clear_message() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();

@@ -29,9 +29,14 @@ pub struct ExpertArgs {
     pub out: PathBuf,
     #[command(flatten)]
     pub overrides: overrides::OverrideArgs,
-    /// Episodes of the deterministic policy evaluated at the end.
+    /// Episodes of the deterministic policy evaluated at the end (and at each periodic check).
     #[arg(long, default_value_t = 20)]
     pub eval_episodes: u32,
+    /// Evaluate the deterministic policy every N steps and ship the best one seen (SB3's
+    /// "best model"): SAC on Lunar Lander can drift from landing back to hovering late in a
+    /// run, and the oracle should be the best policy the run found. 0 ships the last policy.
+    #[arg(long, default_value_t = 0)]
+    pub eval_every: u64,
 }
 
 /// The note shipped beside an expert.
@@ -47,8 +52,21 @@ struct ExpertNote {
     eval_episodes: u32,
     eval_mean_return: f64,
     eval_success_rate: f64,
+    /// With `--eval-every`: the step whose policy was shipped, and every periodic check.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    shipped_step: Option<u64>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    checks: Vec<EvalCheck>,
     wall_seconds: f64,
     config: EvaluativeRunConfig,
+}
+
+/// One periodic evaluation of the policy during training.
+#[derive(Debug, Serialize)]
+struct EvalCheck {
+    step: u64,
+    mean_return: f64,
+    success_rate: f64,
 }
 
 pub fn run(args: ExpertArgs) -> anyhow::Result<()> {
@@ -61,10 +79,56 @@ pub fn run(args: ExpertArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let mut run = EvaluativeRun::new(config.clone(), args.steps);
     let label = format!("expert {} seed {}", args.task, args.seed);
-    let episodes = drive(&mut run, &mut NoTrainer, args.steps, &metrics_dir, &label)?;
+    let mut episodes = Vec::new();
+    let mut checks = Vec::new();
+    // (mean return, step, safetensors) of the best periodic check so far.
+    let mut best: Option<(f64, u64, Vec<u8>)> = None;
+    let chunk = if args.eval_every == 0 {
+        args.steps
+    } else {
+        args.eval_every
+    };
+    let mut target = 0;
+    while target < args.steps {
+        target = (target + chunk).min(args.steps);
+        let previous = run.steps();
+        let mut more = drive(
+            &mut run,
+            &mut NoTrainer,
+            target,
+            &metrics_dir,
+            &label,
+            previous > 0,
+        )?;
+        episodes.append(&mut more);
+        if args.eval_every > 0 {
+            // Evaluate a copy, so the check leaves the run's own state (and its RNG) untouched.
+            let bytes = run.learner().to_safetensors();
+            let mut copy = crate::rl::sac::Sac::from_safetensors(&bytes)?;
+            let (mean_return, success_rate) =
+                evaluate_policy(args.task, &mut copy, args.eval_episodes, 2_000_000);
+            eprintln!(
+                "expert check at step {target}: return {mean_return:.1}, success {success_rate:.2}"
+            );
+            checks.push(EvalCheck {
+                step: target,
+                mean_return,
+                success_rate,
+            });
+            if best.as_ref().is_none_or(|(b, _, _)| mean_return > *b) {
+                // On disk at once, so a long run stopped early still leaves its best policy.
+                write_atomically(&args.out, &bytes)?;
+                best = Some((mean_return, target, bytes));
+            }
+        }
+    }
     let (final_mean_return, _) = final_performance(&episodes, 10);
     let episodes_done = run.episodes();
-    let mut learner = run.into_learner();
+    let (shipped_step, mut learner) = match best {
+        Some((_, step, bytes)) => (Some(step), crate::rl::sac::Sac::from_safetensors(&bytes)?),
+        None => (None, run.into_learner()),
+    };
+    // The shipped policy is judged on seeds the periodic checks never saw.
     let (eval_mean_return, eval_success_rate) =
         evaluate_policy(args.task, &mut learner, args.eval_episodes, 1_000_000);
     write_atomically(&args.out, &learner.to_safetensors())?;
@@ -77,6 +141,8 @@ pub fn run(args: ExpertArgs) -> anyhow::Result<()> {
         eval_episodes: args.eval_episodes,
         eval_mean_return,
         eval_success_rate,
+        shipped_step,
+        checks,
         wall_seconds: start.elapsed().as_secs_f64(),
         config,
     };

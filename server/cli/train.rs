@@ -101,22 +101,29 @@ pub fn load_expert(path: &Path, task: Task) -> anyhow::Result<Sac> {
     crate::session::load_expert(path, task).map_err(anyhow::Error::msg)
 }
 
-/// Run `run` to `steps`, appending finished episodes to `metrics.csv` in `out`.
+/// Run `run` to `steps`, writing finished episodes to `metrics.csv` in `out` (a new file, or
+/// appended to the one an earlier call began when `append`).
 pub fn drive(
     run: &mut EvaluativeRun,
     trainer: &mut dyn EvaluativeTrainer,
     steps: u64,
     out: &Path,
     label: &str,
+    append: bool,
 ) -> anyhow::Result<Vec<EpisodeRecord>> {
     let path = out.join("metrics.csv");
-    let mut csv = BufWriter::new(
-        File::create(&path).with_context(|| format!("creating {}", path.display()))?,
-    );
-    writeln!(
-        csv,
-        "step,episode,return,cumulative_return,feedback_count,feedback_fraction"
-    )?;
+    let file = if append {
+        File::options().append(true).open(&path)
+    } else {
+        File::create(&path)
+    };
+    let mut csv = BufWriter::new(file.with_context(|| format!("opening {}", path.display()))?);
+    if !append {
+        writeln!(
+            csv,
+            "step,episode,return,cumulative_return,feedback_count,feedback_fraction"
+        )?;
+    }
     let mut episodes = Vec::new();
     let mut progress = Progress::new(steps, label);
     while run.steps() < steps {
@@ -185,7 +192,14 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let mut run = EvaluativeRun::new(config.clone(), args.steps);
     let label = format!("{} {} seed {}", args.task, args.method, args.seed);
-    let episodes = drive(&mut run, trainer.as_mut(), args.steps, &args.out, &label)?;
+    let episodes = drive(
+        &mut run,
+        trainer.as_mut(),
+        args.steps,
+        &args.out,
+        &label,
+        false,
+    )?;
     let wall_seconds = start.elapsed().as_secs_f64();
     let (final_mean_return, final_success_rate) = final_performance(&episodes, 10);
     let summary = TrainSummary {
