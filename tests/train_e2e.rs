@@ -133,6 +133,110 @@ fn periodic_checks_ship_the_best_policy_without_changing_the_run() {
 }
 
 #[test]
+fn a_run_killed_midway_resumes_from_its_checkpoint_to_the_same_result() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut args = vec![
+        "expert",
+        "--task",
+        "placing",
+        "--steps",
+        "200",
+        "--eval-episodes",
+        "1",
+        "--out",
+        "models/placing.safetensors",
+    ];
+    args.extend(TINY);
+    ok(&dualrep(&args, d));
+    let train = |out: &str, every: &str, extra: &[&str]| {
+        let mut args = vec![
+            "train",
+            "--task",
+            "placing",
+            "--method",
+            "dref",
+            "--steps",
+            "1500",
+            "--seed",
+            "2",
+            "--checkpoint-every",
+            every,
+            "--out",
+            out,
+        ];
+        args.extend(TINY);
+        args.extend(extra);
+        args.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let straight = ok(&cli::dualrep_in(
+        &train("straight", "0", &[])
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+        Some(d),
+    ));
+
+    // Kill the run as soon as its first checkpoint is on disk.
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_dualrep"))
+        .args(train("killed", "300", &[]))
+        .current_dir(d)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let checkpoint = d.join("killed/checkpoint.run");
+    while !checkpoint.exists() {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before its checkpoint"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(!d.join("killed/summary.json").exists());
+
+    // Another run's arguments are refused and the checkpoint stays.
+    let other = train("killed", "300", &["--set", "c=0.5"]);
+    let out = cli::dualrep_in(
+        &other.iter().map(String::as_str).collect::<Vec<_>>(),
+        Some(d),
+    );
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("another configuration") && stderr.contains("delete it"),
+        "{stderr}"
+    );
+    assert!(checkpoint.exists());
+
+    let again = train("killed", "300", &[]);
+    let out = cli::dualrep_in(
+        &again.iter().map(String::as_str).collect::<Vec<_>>(),
+        Some(d),
+    );
+    let resumed = ok(&out);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("resumed from checkpoint.run at step"));
+    for field in [
+        "steps",
+        "episodes",
+        "cumulative_return",
+        "feedback_count",
+        "final_mean_return",
+        "final_success_rate",
+    ] {
+        assert_eq!(resumed[field], straight[field], "{field}");
+    }
+    let metrics = |run: &str| std::fs::read_to_string(d.join(run).join("metrics.csv")).unwrap();
+    assert_eq!(metrics("killed"), metrics("straight"));
+    assert!(
+        !checkpoint.exists(),
+        "a finished run removes its checkpoint"
+    );
+}
+
+#[test]
 fn bad_input_is_refused_with_a_clear_message() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();

@@ -99,6 +99,7 @@ pub fn run(args: ExpertArgs) -> anyhow::Result<()> {
             &metrics_dir,
             &label,
             previous > 0,
+            None,
         )?;
         episodes.append(&mut more);
         if args.eval_every > 0 {

@@ -1,6 +1,10 @@
 //! `dualrep train`: one SAC / EF-p% / DREF run with the synthetic evaluative trainer, writing
 //! `metrics.csv` (a row per finished episode, flushed as it happens) and `summary.json` (written
 //! last, atomically: its presence marks a finished run for `reproduce`).
+//!
+//! A long run also keeps `checkpoint.run` (every `--checkpoint-every` steps, at the next
+//! episode's start): a run stopped midway and started again with the same arguments goes on
+//! from there, bit for bit, and the file is removed once `summary.json` is written.
 
 use std::fs::{self, File};
 use std::io::{BufWriter, Write};
@@ -9,9 +13,9 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
-use super::output::publish_summary;
+use super::output::{publish_summary, write_atomically};
 use super::overrides;
 use super::progress::Progress;
 use crate::guidance::evaluative_run::{EpisodeRecord, EvaluativeRun, EvaluativeRunConfig};
@@ -46,7 +50,88 @@ pub struct TrainArgs {
     /// The oracle's rule: authors (alpha Q*) or sign-aware.
     #[arg(long, default_value = "authors", value_parser = parse_oracle_rule)]
     pub oracle: OracleRule,
+    /// Save the whole run to OUT/checkpoint.run about every N steps (0: never), so a stopped
+    /// run resumes instead of starting over.
+    #[arg(long, default_value_t = 10_000)]
+    pub checkpoint_every: u64,
 }
+
+/// The run checkpoint's file name inside OUT.
+pub const CHECKPOINT_FILE: &str = "checkpoint.run";
+
+/// What `train` keeps with a run checkpoint beside the run itself.
+#[derive(Debug, Default, Serialize, Deserialize)]
+struct ResumeNotes {
+    /// The last finished episodes (for the final mean return and success rate).
+    recent_episodes: Vec<EpisodeRecord>,
+    /// Wall time spent on the run before the checkpoint.
+    wall_seconds: f64,
+}
+
+/// Writes the run checkpoint at the first episode start after each multiple of `every` steps
+/// (never if `every` is 0), and keeps the notes that go with it.
+pub struct Checkpointer {
+    path: PathBuf,
+    every: u64,
+    next_at: u64,
+    notes: ResumeNotes,
+    start: Instant,
+}
+
+impl Checkpointer {
+    fn new(path: PathBuf, every: u64, run: &EvaluativeRun, notes: ResumeNotes) -> Self {
+        Self {
+            path,
+            every,
+            next_at: next_multiple(run.steps(), every),
+            notes,
+            start: Instant::now(),
+        }
+    }
+
+    fn wall_seconds(&self) -> f64 {
+        self.notes.wall_seconds + self.start.elapsed().as_secs_f64()
+    }
+
+    fn record(&mut self, episode: &EpisodeRecord) {
+        let recent = &mut self.notes.recent_episodes;
+        recent.push(episode.clone());
+        let excess = recent.len().saturating_sub(RECENT_EPISODES);
+        recent.drain(..excess);
+    }
+
+    /// Save if the run is at an episode start past the next multiple of `every`.
+    fn maybe_save(
+        &mut self,
+        run: &EvaluativeRun,
+        trainer: &dyn EvaluativeTrainer,
+    ) -> anyhow::Result<()> {
+        if self.every == 0 || run.steps() < self.next_at || !run.at_episode_start() {
+            return Ok(());
+        }
+        let notes = ResumeNotes {
+            recent_episodes: self.notes.recent_episodes.clone(),
+            wall_seconds: self.wall_seconds(),
+        };
+        write_atomically(
+            &self.path,
+            &run.checkpoint(trainer, serde_json::to_value(notes)?),
+        )?;
+        self.next_at = next_multiple(run.steps(), self.every);
+        Ok(())
+    }
+}
+
+/// The first multiple of `every` above `step` (`u64::MAX` when `every` is 0).
+fn next_multiple(step: u64, every: u64) -> u64 {
+    match every {
+        0 => u64::MAX,
+        _ => (step / every + 1) * every,
+    }
+}
+
+/// Episodes behind `final_mean_return` and `final_success_rate`.
+const RECENT_EPISODES: usize = 10;
 
 fn parse_oracle_rule(s: &str) -> Result<OracleRule, String> {
     match s {
@@ -110,6 +195,7 @@ pub fn drive(
     out: &Path,
     label: &str,
     append: bool,
+    mut checkpoints: Option<&mut Checkpointer>,
 ) -> anyhow::Result<Vec<EpisodeRecord>> {
     let path = out.join("metrics.csv");
     let file = if append {
@@ -140,6 +226,10 @@ pub fn drive(
                 e.feedback_fraction
             )?;
             csv.flush()?;
+            if let Some(c) = checkpoints.as_deref_mut() {
+                c.record(&e);
+                c.maybe_save(run, trainer)?;
+            }
             episodes.push(e);
         }
         progress.update(run.steps(), || {
@@ -189,19 +279,49 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
         serde_json::to_vec_pretty(&config)?,
     )?;
 
-    let start = Instant::now();
-    let mut run = EvaluativeRun::new(config.clone(), args.steps);
     let label = format!("{} {} seed {}", args.task, args.method, args.seed);
-    let episodes = drive(
+    let checkpoint_path = args.out.join(CHECKPOINT_FILE);
+    let (mut run, notes) = match fs::read(&checkpoint_path) {
+        Ok(bytes) => {
+            let (run, notes) = EvaluativeRun::resume(&bytes, &config, trainer.as_mut())
+                .with_context(|| {
+                    format!(
+                        "resuming from {} (delete it to start the run over)",
+                        checkpoint_path.display()
+                    )
+                })?;
+            let notes: ResumeNotes = serde_json::from_value(notes)
+                .with_context(|| format!("reading the notes in {}", checkpoint_path.display()))?;
+            keep_episodes(&args.out.join("metrics.csv"), run.episodes())?;
+            eprintln!(
+                "{label}: resumed from {CHECKPOINT_FILE} at step {}",
+                run.steps()
+            );
+            (run, notes)
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => (
+            EvaluativeRun::new(config.clone(), args.steps),
+            ResumeNotes::default(),
+        ),
+        Err(e) => {
+            return Err(e).with_context(|| format!("reading {}", checkpoint_path.display()));
+        }
+    };
+    let resumed = run.steps() > 0;
+    let mut checkpointer =
+        Checkpointer::new(checkpoint_path.clone(), args.checkpoint_every, &run, notes);
+    drive(
         &mut run,
         trainer.as_mut(),
         args.steps,
         &args.out,
         &label,
-        false,
+        resumed,
+        Some(&mut checkpointer),
     )?;
-    let wall_seconds = start.elapsed().as_secs_f64();
-    let (final_mean_return, final_success_rate) = final_performance(&episodes, 10);
+    let wall_seconds = checkpointer.wall_seconds();
+    let (final_mean_return, final_success_rate) =
+        final_performance(&checkpointer.notes.recent_episodes, RECENT_EPISODES);
     let summary = TrainSummary {
         task: args.task,
         method: args.method,
@@ -217,5 +337,26 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
         updates_per_second: run.learner().updates() as f64 / wall_seconds,
         config,
     };
-    publish_summary(&args.out.join("summary.json"), &summary)
+    publish_summary(&args.out.join("summary.json"), &summary)?;
+    match fs::remove_file(&checkpoint_path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            Err(e).with_context(|| format!("removing {}", checkpoint_path.display()))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Cut `metrics.csv` back to its header and first `episodes` rows: the rows a run checkpoint
+/// counts (episodes that finished after it are run again and written again).
+fn keep_episodes(path: &Path, episodes: u64) -> anyhow::Result<()> {
+    let text = fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let keep: Vec<&str> = text.lines().take(1 + episodes as usize).collect();
+    if keep.len() != 1 + episodes as usize {
+        anyhow::bail!(
+            "{} has {} episode rows, the checkpoint counts {episodes}",
+            path.display(),
+            keep.len().saturating_sub(1)
+        );
+    }
+    write_atomically(path, format!("{}\n", keep.join("\n")).as_bytes())
 }

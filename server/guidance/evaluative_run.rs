@@ -143,6 +143,9 @@ pub struct EvaluativeRun {
     schedule: FeedbackSchedule,
     /// Draws each episode's reset seed, so a run is reproducible from its own seed.
     episode_seeds: ChaCha8Rng,
+    /// The reset seed of the episode under way: a checkpoint at an episode's start rebuilds
+    /// the env from it.
+    episode_seed: u64,
     obs: Vec<f32>,
     action: Vec<f32>,
     steps: u64,
@@ -173,7 +176,8 @@ impl EvaluativeRun {
         let schedule =
             FeedbackSchedule::new(config.method, QueryRule::new(q.c, q.k, q.form), config.seed);
         let mut episode_seeds = ChaCha8Rng::seed_from_u64(config.seed ^ 0xe915_0de5_eed5_0000);
-        let obs = env.reset(episode_seeds.random());
+        let episode_seed = episode_seeds.random();
+        let obs = env.reset(episode_seed);
         Self {
             config,
             env,
@@ -181,6 +185,7 @@ impl EvaluativeRun {
             replay,
             schedule,
             episode_seeds,
+            episode_seed,
             obs,
             action: vec![0.0; act_dim],
             steps: 0,
@@ -333,7 +338,8 @@ impl EvaluativeRun {
         self.episodes += 1;
         self.episode_return = 0.0;
         self.episode_length = 0;
-        self.obs = self.env.reset(self.episode_seeds.random());
+        self.episode_seed = self.episode_seeds.random();
+        self.obs = self.env.reset(self.episode_seed);
         record
     }
 }
@@ -367,6 +373,10 @@ pub fn evaluate_policy(task: Task, learner: &mut Sac, episodes: u32, seed: u64) 
     let n = f64::from(episodes.max(1));
     (total / n, f64::from(successes) / n)
 }
+
+#[path = "run_checkpoint.rs"]
+mod run_checkpoint;
+pub use run_checkpoint::RunCheckpointError;
 
 #[cfg(test)]
 #[path = "evaluative_run_tests.rs"]

@@ -55,6 +55,17 @@ pub struct EvaluativeQuery<'a> {
 /// on its own thread, so blocking there stalls nothing else.
 pub trait EvaluativeTrainer {
     fn evaluate(&mut self, query: &EvaluativeQuery<'_>) -> Evaluation;
+
+    /// The trainer's own state for a run's checkpoint (a synthetic oracle's random stream);
+    /// `Null` for a trainer that has none.
+    fn checkpoint_state(&self) -> serde_json::Value {
+        serde_json::Value::Null
+    }
+
+    /// Continue from a state that [`EvaluativeTrainer::checkpoint_state`] returned.
+    fn restore_state(&mut self, _state: &serde_json::Value) -> Result<(), String> {
+        Ok(())
+    }
 }
 
 /// The trainer of a run that never asks (plain SAC): every query would get "no feedback".

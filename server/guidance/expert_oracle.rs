@@ -70,6 +70,17 @@ impl EvaluativeTrainer for ExpertOracle {
         let q_learner = self.expert.q_value(query.obs, query.action);
         Self::judge(self.rule, query.step, q_expert, q_learner)
     }
+
+    /// The expert's sampling stream is the oracle's only state (alpha follows the step).
+    fn checkpoint_state(&self) -> serde_json::Value {
+        serde_json::to_value(self.expert.rng_state()).expect("an RNG state serialises")
+    }
+
+    fn restore_state(&mut self, state: &serde_json::Value) -> Result<(), String> {
+        let rng = serde_json::from_value(state.clone())
+            .map_err(|e| format!("the oracle's RNG state: {e}"))?;
+        self.expert.restore_rng(&rng)
+    }
 }
 
 #[cfg(test)]

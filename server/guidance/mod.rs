@@ -5,7 +5,8 @@
 //! - `feedback_schedule`: which steps ask, per method (DREF, EF-p%, SAC).
 //! - `evaluative_trainer`: the `EvaluativeTrainer` trait (synthetic oracle or a person) and H.
 //! - `expert_oracle`: the synthetic trainer, a SAC expert's critic judging the learner's action.
-//! - `evaluative_run`: one SAC / EF-p% / DREF run, step by step, and policy evaluation.
+//! - `evaluative_run`: one SAC / EF-p% / DREF run, step by step, and policy evaluation; its
+//!   `run_checkpoint` saves a whole run between episodes so a long one resumes bit for bit.
 //! - `drpl`: what to ask: DRPL's scene-graph segments and pairs, its baselines, the belief over
 //!   the reward weights (APReL's sampling-based belief), acquisition, the synthetic preference
 //!   oracle and the preference run.

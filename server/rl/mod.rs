@@ -15,7 +15,9 @@
 //! - [`loss`]: [`mse_loss`] with its gradient.
 //! - [`squashed_gaussian`]: SAC's tanh-squashed Gaussian policy head: sampling, log-prob
 //!   with the tanh correction, and its gradient.
-//! - [`replay`]: the preallocated replay buffer, `(s, a, r, H, s', terminated)` per row.
+//! - [`replay`]: the preallocated replay buffer, `(s, a, r, H, s', terminated)` per row, and
+//!   its bytes for a run's checkpoint.
+//! - [`rng_state`]: a generator's state as data, for checkpoints.
 //! - [`sac`]: [`sac::Sac`], SAC with DREF's human critic, built from all of the above.
 //!
 //! ## Allocation
@@ -89,6 +91,7 @@ pub mod linear;
 pub mod loss;
 pub mod mlp;
 pub mod replay;
+pub mod rng_state;
 pub mod sac;
 pub mod squashed_gaussian;
 pub mod workspace;

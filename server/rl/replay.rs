@@ -48,6 +48,16 @@ impl Batch {
     }
 }
 
+/// A buffer's shape and fill, stored beside its bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct ReplayLayout {
+    pub capacity: usize,
+    pub len: usize,
+    pub head: usize,
+    pub obs_dim: usize,
+    pub act_dim: usize,
+}
+
 /// A ring buffer of transitions; the oldest are overwritten once it is full.
 #[derive(Clone, Debug)]
 pub struct ReplayBuffer {
@@ -131,6 +141,85 @@ impl ReplayBuffer {
         self.human[slot]
     }
 
+    /// The filled rows as little-endian f32 bytes, array after array (observations, actions,
+    /// rewards, H, next observations, dones), for a run's checkpoint; with [`ReplayLayout`].
+    pub fn to_bytes(&self) -> (ReplayLayout, Vec<u8>) {
+        let layout = ReplayLayout {
+            capacity: self.capacity,
+            len: self.len,
+            head: self.head,
+            obs_dim: self.obs_dim,
+            act_dim: self.act_dim,
+        };
+        let mut bytes = Vec::with_capacity(self.len * self.row_floats() * 4);
+        for (array, width) in self.arrays() {
+            for v in &array[..self.len * width] {
+                bytes.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        (layout, bytes)
+    }
+
+    /// The buffer [`ReplayBuffer::to_bytes`] described; an error if the bytes do not fit the
+    /// layout.
+    pub fn from_bytes(layout: &ReplayLayout, bytes: &[u8]) -> Result<Self, String> {
+        let ReplayLayout {
+            capacity,
+            len,
+            head,
+            obs_dim,
+            act_dim,
+        } = *layout;
+        if capacity == 0 || len > capacity || head >= capacity || (len < capacity && head != len) {
+            return Err(format!("replay layout {layout:?} is inconsistent"));
+        }
+        let mut buffer = Self::new(capacity, obs_dim, act_dim);
+        if bytes.len() != len * buffer.row_floats() * 4 {
+            return Err(format!(
+                "replay bytes: expected {} for {len} rows, found {}",
+                len * buffer.row_floats() * 4,
+                bytes.len()
+            ));
+        }
+        let mut floats = bytes
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]));
+        for (array, width) in buffer.arrays_mut() {
+            for (slot, v) in array[..len * width].iter_mut().zip(&mut floats) {
+                *slot = v;
+            }
+        }
+        buffer.len = len;
+        buffer.head = head;
+        Ok(buffer)
+    }
+
+    fn row_floats(&self) -> usize {
+        2 * self.obs_dim + self.act_dim + 3
+    }
+
+    fn arrays(&self) -> [(&[f32], usize); 6] {
+        [
+            (&self.obs, self.obs_dim),
+            (&self.actions, self.act_dim),
+            (&self.rewards, 1),
+            (&self.human, 1),
+            (&self.next_obs, self.obs_dim),
+            (&self.dones, 1),
+        ]
+    }
+
+    fn arrays_mut(&mut self) -> [(&mut [f32], usize); 6] {
+        [
+            (&mut self.obs, self.obs_dim),
+            (&mut self.actions, self.act_dim),
+            (&mut self.rewards, 1),
+            (&mut self.human, 1),
+            (&mut self.next_obs, self.obs_dim),
+            (&mut self.dones, 1),
+        ]
+    }
+
     /// Fill `batch` with transitions drawn uniformly with replacement.
     pub fn sample<R: Rng>(&self, rng: &mut R, batch: &mut Batch) {
         assert!(!self.is_empty(), "sampling an empty replay buffer");
@@ -210,5 +299,31 @@ mod tests {
         let mut batch = Batch::new(4, 2, 1);
         buf.sample(&mut ChaCha8Rng::seed_from_u64(2), &mut batch);
         assert!(batch.human.iter().all(|&h| h == -1.0));
+    }
+
+    #[test]
+    fn bytes_round_trip_a_partial_and_a_wrapped_buffer() {
+        for pushes in [2, 5] {
+            let mut buf = ReplayBuffer::new(3, 2, 1);
+            for m in 0..pushes {
+                push_marked(&mut buf, m as f32, m % 2 == 1);
+            }
+            buf.set_human(0, 1.0);
+            let (layout, bytes) = buf.to_bytes();
+            let mut back = ReplayBuffer::from_bytes(&layout, &bytes).unwrap();
+            assert_eq!((back.len(), back.head), (buf.len(), buf.head));
+            let (mut a, mut b) = (Batch::new(32, 2, 1), Batch::new(32, 2, 1));
+            buf.sample(&mut ChaCha8Rng::seed_from_u64(3), &mut a);
+            back.sample(&mut ChaCha8Rng::seed_from_u64(3), &mut b);
+            assert_eq!((a.obs, a.human, a.dones), (b.obs, b.human, b.dones));
+            // The next push lands in the same slot in both.
+            assert_eq!(
+                push_marked(&mut back, 9.0, false),
+                push_marked(&mut buf, 9.0, false)
+            );
+            assert!(ReplayBuffer::from_bytes(&layout, &bytes[4..]).is_err());
+            let bad = ReplayLayout { head: 3, ..layout };
+            assert!(ReplayBuffer::from_bytes(&bad, &bytes).is_err());
+        }
     }
 }

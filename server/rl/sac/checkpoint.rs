@@ -9,13 +9,12 @@
 
 use std::collections::{BTreeMap, HashMap};
 
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
 use safetensors::tensor::TensorView;
 use safetensors::{Dtype, SafeTensorError, SafeTensors};
 use serde::{Deserialize, Serialize};
 
 use super::{Adam, Mlp, Sac, SacConfig};
+use crate::rl::rng_state::RngState;
 
 const FORMAT: &str = "dualrep-sac/1";
 
@@ -46,14 +45,6 @@ pub enum CheckpointError {
 struct Dims {
     obs_dim: usize,
     act_dim: usize,
-}
-
-/// ChaCha8's whole state: key, stream and position in the stream (u128, as a decimal string).
-#[derive(Serialize, Deserialize)]
-struct RngState {
-    seed: [u8; 32],
-    stream: u64,
-    word_pos: String,
 }
 
 /// A learner's tensors `(name, shape, f32 bytes)` and metadata, before serialisation.
@@ -106,11 +97,7 @@ impl Sac {
             }
         }
 
-        let rng = RngState {
-            seed: self.rng.get_seed(),
-            stream: self.rng.get_stream(),
-            word_pos: self.rng.get_word_pos().to_string(),
-        };
+        let rng = RngState::of(&self.rng);
         let metadata = BTreeMap::from([
             ("format".to_string(), FORMAT.to_string()),
             ("config".to_string(), json(&self.config)),
@@ -179,14 +166,12 @@ impl Sac {
         let critic = || Mlp::zeros(obs_dim + act_dim, &hidden, 1);
         let actor = Mlp::zeros(obs_dim, &hidden, 2 * act_dim);
         let human = config.human_critic.is_some().then(|| (critic(), critic()));
-        let mut word_pos_rng = ChaCha8Rng::from_seed(rng.seed);
-        word_pos_rng.set_stream(rng.stream);
-        word_pos_rng.set_word_pos(rng.word_pos.parse().map_err(|_| {
-            CheckpointError::BadMetadata {
+        let rng = rng
+            .restore()
+            .map_err(|message| CheckpointError::BadMetadata {
                 key: "rng",
-                message: format!("word_pos {:?} is not a number", rng.word_pos),
-            }
-        })?);
+                message,
+            })?;
         let mut sac = Sac::from_parts(
             obs_dim,
             act_dim,
@@ -194,7 +179,7 @@ impl Sac {
             actor,
             [critic(), critic()],
             human,
-            word_pos_rng,
+            rng,
         );
         sac.updates = updates;
 

@@ -175,6 +175,17 @@ impl Sac {
         self.updates
     }
 
+    /// The state of the generator behind sampled actions and minibatches (also in
+    /// [`Sac::to_safetensors`]); an expert that only acts needs nothing else to resume.
+    pub fn rng_state(&self) -> crate::rl::rng_state::RngState {
+        crate::rl::rng_state::RngState::of(&self.rng)
+    }
+
+    pub fn restore_rng(&mut self, state: &crate::rl::rng_state::RngState) -> Result<(), String> {
+        self.rng = state.restore()?;
+        Ok(())
+    }
+
     /// The entropy temperature alpha = exp(log_ent_coef).
     pub fn ent_coef(&self) -> f32 {
         self.log_ent_coef.exp()

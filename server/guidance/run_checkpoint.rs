@@ -1,0 +1,289 @@
+//! A whole evaluative run as bytes, taken at the start of an episode, so that a long
+//! `dualrep train` (a Placing or Lunar Lander run of the Figure 3 grid) stopped midway resumes
+//! bit for bit where it was: same learner, same replay rows, same random streams, same env.
+//!
+//! Only an episode's start is a safe point: the env's physics state is not serialisable, but a
+//! fresh episode is fully defined by its reset seed (tests/env_contract.rs pins that down).
+//!
+//! Layout (no IO here; the caller writes the bytes atomically):
+//! `MAGIC`, then a u64 LE length and the run's state as JSON, then a u64 LE length and the
+//! learner's safetensors, then the replay rows ([`ReplayBuffer::to_bytes`]) to the end.
+
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use super::{EvaluativeRun, EvaluativeRunConfig, EvaluativeTrainer};
+use crate::guidance::feedback_schedule::FeedbackSchedule;
+use crate::guidance::query_rule::QueryRule;
+use crate::rl::Sac;
+use crate::rl::replay::{ReplayBuffer, ReplayLayout};
+use crate::rl::rng_state::RngState;
+
+const MAGIC: &[u8] = b"dualrep-run/1\n";
+
+#[derive(Debug, thiserror::Error)]
+#[error("run checkpoint: {0}")]
+pub struct RunCheckpointError(String);
+
+/// Everything of a run at an episode's start except the learner and the replay rows.
+#[derive(Serialize, Deserialize)]
+struct RunState {
+    config: EvaluativeRunConfig,
+    steps: u64,
+    episodes: u64,
+    cumulative_return: f64,
+    feedback_count: u64,
+    no_feedback_count: u64,
+    episode_seed: u64,
+    episode_seeds: RngState,
+    schedule: ScheduleState,
+    queried: Vec<(u64, usize)>,
+    replay: ReplayLayout,
+    trainer: serde_json::Value,
+    /// Whatever the caller keeps with the run (the CLI: recent episodes, wall time so far).
+    notes: serde_json::Value,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum ScheduleState {
+    Never,
+    Random { probability: f64, rng: RngState },
+    Dref(QueryRule),
+}
+
+impl ScheduleState {
+    fn of(schedule: &FeedbackSchedule) -> Self {
+        match schedule {
+            FeedbackSchedule::Never => Self::Never,
+            FeedbackSchedule::Random { probability, rng } => Self::Random {
+                probability: *probability,
+                rng: RngState::of(rng),
+            },
+            FeedbackSchedule::Dref(rule) => Self::Dref(rule.clone()),
+        }
+    }
+
+    fn restore(self) -> Result<FeedbackSchedule, String> {
+        Ok(match self {
+            Self::Never => FeedbackSchedule::Never,
+            Self::Random { probability, rng } => FeedbackSchedule::Random {
+                probability,
+                rng: Box::new(rng.restore()?),
+            },
+            Self::Dref(rule) => FeedbackSchedule::Dref(rule),
+        })
+    }
+}
+
+impl EvaluativeRun {
+    /// True between episodes: the moment [`EvaluativeRun::checkpoint`] may be taken.
+    pub fn at_episode_start(&self) -> bool {
+        self.episode_length == 0
+    }
+
+    /// The run and `trainer`'s state as bytes, with the caller's `notes` (returned by
+    /// [`EvaluativeRun::resume`]). Panics unless [`Self::at_episode_start`].
+    pub fn checkpoint(&self, trainer: &dyn EvaluativeTrainer, notes: serde_json::Value) -> Vec<u8> {
+        assert!(
+            self.at_episode_start(),
+            "a run checkpoint is taken between episodes"
+        );
+        let (replay, rows) = self.replay.to_bytes();
+        let state = RunState {
+            config: self.config.clone(),
+            steps: self.steps,
+            episodes: self.episodes,
+            cumulative_return: self.cumulative_return,
+            feedback_count: self.feedback_count,
+            no_feedback_count: self.no_feedback_count,
+            episode_seed: self.episode_seed,
+            episode_seeds: RngState::of(&self.episode_seeds),
+            schedule: ScheduleState::of(&self.schedule),
+            queried: self.queried.clone(),
+            replay,
+            trainer: trainer.checkpoint_state(),
+            notes,
+        };
+        let state = serde_json::to_vec(&state).expect("a run's state serialises");
+        let learner = self.learner.to_safetensors();
+        let mut bytes =
+            Vec::with_capacity(MAGIC.len() + 16 + state.len() + learner.len() + rows.len());
+        bytes.extend_from_slice(MAGIC);
+        for blob in [&state, &learner] {
+            bytes.extend_from_slice(&(blob.len() as u64).to_le_bytes());
+            bytes.extend_from_slice(blob);
+        }
+        bytes.extend_from_slice(&rows);
+        bytes
+    }
+
+    /// The run [`EvaluativeRun::checkpoint`] saved, with `trainer` put back to its state then,
+    /// and the caller's notes. `config` must be the run's own: another run's is refused.
+    pub fn resume(
+        bytes: &[u8],
+        config: &EvaluativeRunConfig,
+        trainer: &mut dyn EvaluativeTrainer,
+    ) -> Result<(Self, serde_json::Value), RunCheckpointError> {
+        let err = |m: String| RunCheckpointError(m);
+        let rest = bytes
+            .strip_prefix(MAGIC)
+            .ok_or_else(|| err("not a dualrep run checkpoint".into()))?;
+        let (state, rest) = split_blob(rest).ok_or_else(|| err("truncated state".into()))?;
+        let (learner, rows) = split_blob(rest).ok_or_else(|| err("truncated learner".into()))?;
+        let state: RunState =
+            serde_json::from_slice(state).map_err(|e| err(format!("state: {e}")))?;
+        if state.config != *config {
+            return Err(err("it belongs to a run with another configuration".into()));
+        }
+        let learner = Sac::from_safetensors(learner).map_err(|e| err(e.to_string()))?;
+        let replay = ReplayBuffer::from_bytes(&state.replay, rows).map_err(err)?;
+        let schedule = state.schedule.restore().map_err(err)?;
+        let episode_seeds: ChaCha8Rng = state.episode_seeds.restore().map_err(err)?;
+        trainer.restore_state(&state.trainer).map_err(err)?;
+
+        let mut env = state.config.task.make_env();
+        let act_dim = env.spec().action_space.dim();
+        let obs = env.reset(state.episode_seed);
+        let run = Self {
+            config: state.config,
+            env,
+            learner,
+            replay,
+            schedule,
+            episode_seeds,
+            episode_seed: state.episode_seed,
+            obs,
+            action: vec![0.0; act_dim],
+            steps: state.steps,
+            episodes: state.episodes,
+            episode_return: 0.0,
+            episode_length: 0,
+            cumulative_return: state.cumulative_return,
+            feedback_count: state.feedback_count,
+            no_feedback_count: state.no_feedback_count,
+            queried: state.queried,
+        };
+        Ok((run, state.notes))
+    }
+}
+
+/// A u64 LE length and that many bytes, then the rest.
+fn split_blob(bytes: &[u8]) -> Option<(&[u8], &[u8])> {
+    let (len, rest) = bytes.split_first_chunk::<8>()?;
+    let len = usize::try_from(u64::from_le_bytes(*len)).ok()?;
+    (rest.len() >= len).then(|| rest.split_at(len))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::guidance::evaluative_run::EpisodeRecord;
+    use crate::guidance::expert_oracle::{ExpertOracle, OracleRule};
+    use crate::sim::Task;
+
+    fn tiny(task: Task, method: &str) -> EvaluativeRunConfig {
+        let mut config = EvaluativeRunConfig::new(task, method.parse().unwrap(), 5);
+        config.sac.hidden = vec![8, 8];
+        config.sac.batch_size = 16;
+        config
+    }
+
+    /// An oracle whose expert samples its actions, so its random stream matters.
+    fn oracle(task: Task) -> ExpertOracle {
+        let env = task.make_env();
+        let spec = env.spec();
+        let (obs_dim, act_dim) = (spec.observation_space.dim(), spec.action_space.dim());
+        let mut config = crate::rl::SacConfig::for_task(task);
+        config.hidden = vec![8, 8];
+        ExpertOracle::new(
+            Sac::new(obs_dim, act_dim, config, 11),
+            act_dim,
+            OracleRule::Authors,
+        )
+    }
+
+    fn drive(run: &mut EvaluativeRun, trainer: &mut ExpertOracle, to: u64) -> Vec<EpisodeRecord> {
+        let mut episodes = Vec::new();
+        while run.steps() < to {
+            episodes.extend(run.step(trainer).episode);
+        }
+        episodes
+    }
+
+    #[test]
+    fn a_resumed_run_continues_bit_for_bit() {
+        // Tasks whose random episodes are short, so a few hundred steps cross several.
+        for (task, method) in [
+            (Task::Placing, "dref"),
+            (Task::Placing, "ef-50"),
+            (Task::LunarLander, "sac"),
+        ] {
+            let config = tiny(task, method);
+            let steps = 600;
+            let mut straight = EvaluativeRun::new(config.clone(), steps);
+            let mut straight_oracle = oracle(task);
+            let all = drive(&mut straight, &mut straight_oracle, steps);
+
+            // Stop at the first episode start after step 200, checkpoint, and throw it all away.
+            let mut first = EvaluativeRun::new(config.clone(), steps);
+            let mut first_oracle = oracle(task);
+            drive(&mut first, &mut first_oracle, 200);
+            while !first.at_episode_start() {
+                first.step(&mut first_oracle);
+            }
+            let stopped_at = first.steps();
+            let bytes = first.checkpoint(&first_oracle, serde_json::json!({"note": stopped_at}));
+            drop(first);
+
+            let mut fresh_oracle = oracle(task);
+            let (mut resumed, notes) =
+                EvaluativeRun::resume(&bytes, &config, &mut fresh_oracle).unwrap();
+            assert_eq!(notes["note"], stopped_at);
+            assert_eq!(resumed.steps(), stopped_at);
+            let tail = drive(&mut resumed, &mut fresh_oracle, steps);
+            let expected: Vec<_> = all
+                .iter()
+                .filter(|e| e.step > stopped_at)
+                .cloned()
+                .collect();
+            assert!(
+                !expected.is_empty(),
+                "{task} {method}: episodes after the stop"
+            );
+            assert_eq!(tail, expected, "{task} {method}");
+            assert_eq!(
+                resumed.learner().state_checksum(),
+                straight.learner().state_checksum(),
+                "{task} {method}"
+            );
+            assert_eq!(resumed.feedback_count(), straight.feedback_count());
+            assert_eq!(resumed.cumulative_return(), straight.cumulative_return());
+        }
+    }
+
+    #[test]
+    fn a_checkpoint_of_another_run_or_broken_bytes_is_refused() {
+        let config = tiny(Task::Placing, "dref");
+        let mut trainer = oracle(Task::Placing);
+        let mut run = EvaluativeRun::new(config.clone(), 100);
+        drive(&mut run, &mut trainer, 30);
+        while !run.at_episode_start() {
+            run.step(&mut trainer);
+        }
+        let bytes = run.checkpoint(&trainer, serde_json::Value::Null);
+        let mut other = config.clone();
+        other.seed += 1;
+        let refused = |b: &[u8], c: &EvaluativeRunConfig, t: &mut ExpertOracle| {
+            EvaluativeRun::resume(b, c, t)
+                .err()
+                .expect("refused")
+                .to_string()
+        };
+        assert!(refused(&bytes, &other, &mut trainer).contains("another configuration"));
+        assert!(refused(&bytes[..bytes.len() - 4], &config, &mut trainer).contains("replay"));
+        assert!(refused(&bytes[..40], &config, &mut trainer).contains("truncated"));
+        assert!(refused(b"hello", &config, &mut trainer).contains("not a dualrep"));
+        assert!(EvaluativeRun::resume(&bytes, &config, &mut trainer).is_ok());
+    }
+}
