@@ -15,23 +15,29 @@ fn dualrep(args: &[&str], dir: &Path) -> Output {
 
 const TINY: [&str; 4] = ["--set", "hidden=16,16", "--set", "batch_size=32"];
 
+/// Train a tiny expert for `task` into `d/models/<task>.safetensors`; its note.
+fn tiny_expert(d: &Path, task: &str, steps: &str, eval_episodes: &str) -> serde_json::Value {
+    let out = format!("models/{task}.safetensors");
+    let mut args = vec![
+        "expert",
+        "--task",
+        task,
+        "--steps",
+        steps,
+        "--eval-episodes",
+        eval_episodes,
+        "--out",
+        &out,
+    ];
+    args.extend(TINY);
+    ok(&dualrep(&args, d))
+}
+
 #[test]
 fn an_expert_trains_and_drives_dref_and_ef_runs() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let mut args = vec![
-        "expert",
-        "--task",
-        "reaching",
-        "--steps",
-        "300",
-        "--eval-episodes",
-        "2",
-        "--out",
-        "models/reaching.safetensors",
-    ];
-    args.extend(TINY);
-    let note = ok(&dualrep(&args, d));
+    let note = tiny_expert(d, "reaching", "300", "2");
     assert_eq!(note["steps"], 300);
     assert!(d.join("models/reaching.safetensors").is_file());
     assert!(d.join("models/reaching.json").is_file());
@@ -136,19 +142,7 @@ fn periodic_checks_ship_the_best_policy_without_changing_the_run() {
 fn a_run_killed_midway_resumes_from_its_checkpoint_to_the_same_result() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let mut args = vec![
-        "expert",
-        "--task",
-        "placing",
-        "--steps",
-        "200",
-        "--eval-episodes",
-        "1",
-        "--out",
-        "models/placing.safetensors",
-    ];
-    args.extend(TINY);
-    ok(&dualrep(&args, d));
+    tiny_expert(d, "placing", "200", "1");
     let train = |out: &str, every: &str, extra: &[&str]| {
         let mut args = vec![
             "train",
