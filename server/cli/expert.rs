@@ -13,6 +13,7 @@ use super::overrides;
 use super::train::{NoTrainer, drive, final_performance, resolve_config};
 use crate::guidance::evaluative_run::{EvaluativeRun, EvaluativeRunConfig, evaluate_policy};
 use crate::guidance::feedback_schedule::EvaluativeMethod;
+use crate::rl::Sac;
 use crate::sim::Task;
 
 #[derive(Debug, Args)]
@@ -81,8 +82,8 @@ pub fn run(args: ExpertArgs) -> anyhow::Result<()> {
     let label = format!("expert {} seed {}", args.task, args.seed);
     let mut episodes = Vec::new();
     let mut checks = Vec::new();
-    // (mean return, step, safetensors) of the best periodic check so far.
-    let mut best: Option<(f64, u64, Vec<u8>)> = None;
+    // (mean return, step, policy) of the best periodic check so far.
+    let mut best: Option<(f64, u64, Sac)> = None;
     let chunk = if args.eval_every == 0 {
         args.steps
     } else {
@@ -91,21 +92,20 @@ pub fn run(args: ExpertArgs) -> anyhow::Result<()> {
     let mut target = 0;
     while target < args.steps {
         target = (target + chunk).min(args.steps);
-        let previous = run.steps();
+        let appending = run.steps() > 0;
         let mut more = drive(
             &mut run,
             &mut NoTrainer,
             target,
             &metrics_dir,
             &label,
-            previous > 0,
+            appending,
             None,
         )?;
         episodes.append(&mut more);
         if args.eval_every > 0 {
             // Evaluate a copy, so the check leaves the run's own state (and its RNG) untouched.
-            let bytes = run.learner().to_safetensors();
-            let mut copy = crate::rl::sac::Sac::from_safetensors(&bytes)?;
+            let mut copy = run.learner().clone();
             let (mean_return, success_rate) =
                 evaluate_policy(args.task, &mut copy, args.eval_episodes, 2_000_000);
             eprintln!(
@@ -118,15 +118,15 @@ pub fn run(args: ExpertArgs) -> anyhow::Result<()> {
             });
             if best.as_ref().is_none_or(|(b, _, _)| mean_return > *b) {
                 // On disk at once, so a long run stopped early still leaves its best policy.
-                write_atomically(&args.out, &bytes)?;
-                best = Some((mean_return, target, bytes));
+                write_atomically(&args.out, &copy.to_safetensors())?;
+                best = Some((mean_return, target, copy));
             }
         }
     }
     let (final_mean_return, _) = final_performance(&episodes, 10);
     let episodes_done = run.episodes();
     let (shipped_step, mut learner) = match best {
-        Some((_, step, bytes)) => (Some(step), crate::rl::sac::Sac::from_safetensors(&bytes)?),
+        Some((_, step, policy)) => (Some(step), policy),
         None => (None, run.into_learner()),
     };
     // The shipped policy is judged on seeds the periodic checks never saw.

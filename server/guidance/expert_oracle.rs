@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use super::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
 use crate::rl::Sac;
+use crate::rl::rng_state::RngState;
 
 /// How the oracle turns the two Q values into +1 / -1.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -77,8 +78,8 @@ impl EvaluativeTrainer for ExpertOracle {
     }
 
     fn restore_state(&mut self, state: &serde_json::Value) -> Result<(), String> {
-        let rng = serde_json::from_value(state.clone())
-            .map_err(|e| format!("the oracle's RNG state: {e}"))?;
+        let rng =
+            RngState::deserialize(state).map_err(|e| format!("the oracle's RNG state: {e}"))?;
         self.expert.restore_rng(&rng)
     }
 }
