@@ -3,8 +3,11 @@
 
 use dualrep::sim::placing::{self, Placing};
 use dualrep::sim::reaching::{self, Reaching};
-use dualrep::sim::rollout::{SimplePolicy, run_episodes};
-use dualrep::sim::{Env, Geometry, Outcome, RenderState, Step, Task};
+use dualrep::sim::rollout::{SimplePolicy, run_episodes, run_episodes_with};
+use dualrep::sim::{
+    Env, EnvOptions, Geometry, GripObservation, Outcome, PlacingSuccess, RenderState, Step, Task,
+    Variant,
+};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -17,22 +20,48 @@ fn reaching_heuristic_succeeds_in_95_percent() {
 }
 
 #[test]
-fn placing_heuristic_succeeds_in_90_percent() {
+fn placing_heuristic_succeeds_in_95_percent() {
     let (s, _) = run_episodes(Task::Placing, SimplePolicy::Heuristic, 100, 0);
-    assert!(s.success_rate >= 0.90, "{s:?}");
+    assert!(s.success_rate >= 0.95, "{s:?}");
 }
 
-/// Random play rarely succeeds. Measured over seeds 0..100: Reaching 13 %, Placing 15 % (over
-/// 1000 episodes from seed 1000: 10.2 % and 14.2 %); the bounds leave room for small changes.
+/// Both versions of both tasks stay solvable by their scripted controllers.
 #[test]
-fn random_policies_rarely_succeed() {
-    let (r, _) = run_episodes(Task::Reaching, SimplePolicy::Random, 100, 0);
-    assert!(r.success_rate < 0.20, "{r:?}");
-    let (p, _) = run_episodes(Task::Placing, SimplePolicy::Random, 100, 0);
-    assert!(p.success_rate < 0.25, "{p:?}");
+fn heuristics_solve_the_uniform_variants_too() {
+    let uniform = EnvOptions {
+        variant: Variant::Uniform,
+        ..EnvOptions::default()
+    };
+    for task in [Task::Reaching, Task::Placing] {
+        let (s, _) = run_episodes_with(task, &uniform, SimplePolicy::Heuristic, 100, 0);
+        assert!(s.success_rate >= 0.90, "{task}: {s:?}");
+    }
+}
+
+/// The calibration targets of tasks.md for uniformly random actions, on 200 episodes each
+/// (the full figures are in docs/results/calibration/). The authors' random Placing episodes
+/// last 65-250 steps and succeed at most 5 % of the time; their Reaching is reached in about
+/// 30 % of random episodes at 1.2 cm per step (about 3 % at the first version's 5 mm).
+#[test]
+fn random_policies_match_the_calibration_targets() {
+    let (p, _) = run_episodes(Task::Placing, SimplePolicy::Random, 200, 0);
+    assert!(
+        (65.0..=250.0).contains(&p.mean_length) && p.success_rate <= 0.05,
+        "{p:?}"
+    );
+    let (r, _) = run_episodes(Task::Reaching, SimplePolicy::Random, 200, 0);
+    assert!((0.15..=0.45).contains(&r.success_rate), "{r:?}");
 }
 
 // ---------------------------------------------------------------- Placing: the ball
+
+/// The first version of Placing: one "open" command drops the ball, which then falls (rapier).
+fn uniform_placing() -> Placing {
+    Placing::with_options(EnvOptions {
+        variant: Variant::Uniform,
+        ..EnvOptions::default()
+    })
+}
 
 fn placing_obs(env: &Placing) -> [f32; 4] {
     env.observation().try_into().unwrap()
@@ -89,7 +118,7 @@ fn ball(env: &Placing) -> ([f32; 3], bool) {
 
 #[test]
 fn ball_released_over_the_ring_falls_through() {
-    let mut env = Placing::new();
+    let mut env = uniform_placing();
     env.reset(7);
     fly_to(&mut env, [0.0, 0.0, 1.05]);
     assert!(ball(&env).1, "the ball starts held");
@@ -104,7 +133,7 @@ fn ball_released_over_the_ring_falls_through() {
 #[test]
 fn ball_released_over_the_ring_off_centre_still_falls_through() {
     // 5 cm off centre in both axes: still clear of the plates (opening half 0.1, ball 0.025).
-    let mut env = Placing::new();
+    let mut env = uniform_placing();
     env.reset(8);
     fly_to(&mut env, [0.05, -0.05, 1.2]);
     let (step, _) = release_and_wait(&mut env);
@@ -113,7 +142,7 @@ fn ball_released_over_the_ring_off_centre_still_falls_through() {
 
 #[test]
 fn ball_released_over_the_table_away_from_the_hoop_fails() {
-    let mut env = Placing::new();
+    let mut env = uniform_placing();
     env.reset(9);
     fly_to(&mut env, [-0.45, 0.2, 1.2]);
     let (step, _) = release_and_wait(&mut env);
@@ -123,7 +152,7 @@ fn ball_released_over_the_table_away_from_the_hoop_fails() {
 
 #[test]
 fn ball_released_over_the_closed_top_rests_there_and_fails_after_two_seconds() {
-    let mut env = Placing::new();
+    let mut env = uniform_placing();
     env.reset(10);
     fly_to(&mut env, [0.17, 0.0, 1.06]);
     let (step, n) = release_and_wait(&mut env);
@@ -139,7 +168,7 @@ fn ball_released_over_the_closed_top_rests_there_and_fails_after_two_seconds() {
 
 #[test]
 fn closing_again_does_not_regrasp() {
-    let mut env = Placing::new();
+    let mut env = uniform_placing();
     env.reset(11);
     fly_to(&mut env, [-0.45, 0.2, 1.5]);
     env.step(&[0.0, 0.0, 0.0, -1.0]);
@@ -185,6 +214,128 @@ fn gripper_touching_the_top_from_beyond_the_no_entry_box_fails() {
         }
     }
     assert_eq!(outcome, Some(Outcome::Failure));
+}
+
+// ---------------------------------------------------------------- Placing: the authors' gripper
+
+/// Send "open" until the episode ends; the last step and how many "open" steps it took.
+fn open_until_done(env: &mut Placing) -> (Step, u32) {
+    for n in 1..=300 {
+        let step = env.step(&[0.0, 0.0, 0.0, -1.0]);
+        if step.done() {
+            return (step, n);
+        }
+    }
+    panic!("the gripper never let go");
+}
+
+#[test]
+fn authors_gripper_lets_go_after_twelve_open_steps_over_the_ring_and_succeeds_at_once() {
+    let mut env = Placing::new();
+    env.reset(7);
+    fly_to(&mut env, [0.0, 0.0, 1.05]);
+    for i in 1..12 {
+        let step = env.step(&[0.0, 0.0, 0.0, -1.0]);
+        assert!(!step.done(), "released after {i} open steps");
+        assert_eq!(
+            step.obs[3], -1.0,
+            "the observation shows the last command's sign"
+        );
+        assert!(ball(&env).1);
+    }
+    let step = env.step(&[0.0, 0.0, 0.0, -1.0]);
+    assert_eq!(step.outcome, Some(Outcome::Success));
+    assert!(step.terminated && step.reward == 100.0);
+    let (b, held) = ball(&env);
+    assert!(
+        !held && (b[2] - 1.05).abs() < 1e-3,
+        "judged where it was let go: {b:?}"
+    );
+}
+
+#[test]
+fn authors_gripper_release_away_from_the_ring_fails_at_once() {
+    for target in [[-0.45, 0.2, 1.2], [0.17, 0.0, 1.06]] {
+        let mut env = Placing::new();
+        env.reset(9);
+        fly_to(&mut env, target);
+        let (step, n) = open_until_done(&mut env);
+        assert_eq!(n, 12);
+        assert_eq!(step.outcome, Some(Outcome::Failure), "{target:?}");
+        assert!(step.terminated && step.reward == 0.0);
+    }
+}
+
+#[test]
+fn authors_gripper_integrates_commands_and_zero_holds_it() {
+    let mut env = Placing::new();
+    env.reset(3);
+    fly_to(&mut env, [-0.45, 0.2, 1.3]);
+    let level = |env: &Placing| match env.render() {
+        RenderState::Placing { grip_level, .. } => grip_level,
+        other => panic!("{other:?}"),
+    };
+    // Open, close, open, ... never gets past one step open; a zero command keeps the level.
+    for _ in 0..50 {
+        env.step(&[0.0, 0.0, 0.0, -0.3]);
+        assert!(!env.step(&[0.0, 0.0, 0.0, 0.7]).done());
+    }
+    assert_eq!(level(&env), 1.0);
+    for _ in 0..5 {
+        env.step(&[0.0, 0.0, 0.0, -1.0]);
+    }
+    let five_open = level(&env);
+    assert!((five_open - 0.95).abs() < 1e-5, "{five_open}");
+    let step = env.step(&[0.0, 0.0, 0.0, 0.0]);
+    assert_eq!(level(&env), five_open);
+    assert_eq!(step.obs[3], 1.0, "a zero command reads as not open");
+    let (_, n) = open_until_done(&mut env);
+    assert_eq!(n, 7, "twelve net open steps release the ball");
+}
+
+#[test]
+fn grip_level_observation_and_release_point_are_selectable() {
+    let mut env = Placing::with_options(EnvOptions {
+        observe_grip: GripObservation::Level,
+        release_at: 0.9,
+        ..EnvOptions::default()
+    });
+    env.reset(4);
+    fly_to(&mut env, [0.0, 0.0, 1.05]);
+    let obs = env.step(&[0.0, 0.0, 0.0, -1.0]).obs;
+    assert!((obs[3] - 0.99).abs() < 1e-5, "{obs:?}");
+    let (step, n) = open_until_done(&mut env);
+    assert_eq!((n, step.outcome), (9, Some(Outcome::Success)));
+}
+
+#[test]
+fn authors_gripper_with_the_fall_through_rule_simulates_the_ball() {
+    let mut env = Placing::with_options(EnvOptions {
+        success: Some(PlacingSuccess::Through),
+        ..EnvOptions::default()
+    });
+    env.reset(7);
+    fly_to(&mut env, [0.0, 0.0, 1.05]);
+    let (step, n) = open_until_done(&mut env);
+    assert_eq!(step.outcome, Some(Outcome::Success));
+    assert!(
+        (12..=15).contains(&n),
+        "12 open steps, then a 5 cm fall: {n}"
+    );
+    let (b, _) = ball(&env);
+    assert!(b[2] < placing::HOOP_TOP_Z, "{b:?}");
+}
+
+#[test]
+fn authors_start_is_the_home_pose_with_small_noise() {
+    let mut env = Placing::new();
+    for seed in 0..30 {
+        let obs = env.reset(seed);
+        for i in 0..3 {
+            assert!((obs[i] - placing::HOME[i]).abs() <= 0.05 * 0.012 * 50.0 + 1e-6);
+        }
+        assert_eq!(obs[3], 1.0);
+    }
 }
 
 // ---------------------------------------------------------------- safety gates
@@ -390,6 +541,7 @@ fn specs_render_states_and_geometry_fit_the_tasks() {
                 RenderState::Placing {
                     gripper,
                     gripper_closed,
+                    grip_level,
                     ball,
                     ball_held,
                 },
@@ -399,11 +551,13 @@ fn specs_render_states_and_geometry_fit_the_tasks() {
                     hoop_top_z,
                     ball_radius,
                     no_entry,
+                    release_level,
                     ..
                 },
             ) => {
                 assert_eq!(&gripper.position[..], &obs[..3]);
                 assert!(gripper_closed && ball_held && ball == gripper.position);
+                assert_eq!((grip_level, release_level), (1.0, 0.88));
                 assert_eq!(hoop_parts.len(), 8);
                 assert_eq!(opening, [-0.1, -0.1, 0.1, 0.1]);
                 assert_eq!((hoop_top_z, ball_radius), (1.0, 0.025));

@@ -106,8 +106,13 @@ pub fn run(args: ExpertArgs) -> anyhow::Result<()> {
         if args.eval_every > 0 {
             // Evaluate a copy, so the check leaves the run's own state (and its RNG) untouched.
             let mut copy = run.learner().clone();
-            let (mean_return, success_rate) =
-                evaluate_policy(args.task, &mut copy, args.eval_episodes, 2_000_000);
+            let (mean_return, success_rate) = evaluate_policy(
+                args.task,
+                &config.env,
+                &mut copy,
+                args.eval_episodes,
+                2_000_000,
+            );
             eprintln!(
                 "expert check at step {target}: return {mean_return:.1}, success {success_rate:.2}"
             );
@@ -130,8 +135,13 @@ pub fn run(args: ExpertArgs) -> anyhow::Result<()> {
         None => (None, run.into_learner()),
     };
     // The shipped policy is judged on seeds the periodic checks never saw.
-    let (eval_mean_return, eval_success_rate) =
-        evaluate_policy(args.task, &mut learner, args.eval_episodes, 1_000_000);
+    let (eval_mean_return, eval_success_rate) = evaluate_policy(
+        args.task,
+        &config.env,
+        &mut learner,
+        args.eval_episodes,
+        1_000_000,
+    );
     write_atomically(&args.out, &learner.to_safetensors())?;
     let note = ExpertNote {
         task: args.task,

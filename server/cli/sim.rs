@@ -2,8 +2,9 @@
 
 use clap::Args;
 
-use crate::sim::Task;
-use crate::sim::rollout::{SimplePolicy, run_episodes};
+use super::overrides::parse_pair;
+use crate::sim::rollout::{SimplePolicy, run_episodes_with};
+use crate::sim::{EnvOptions, Task};
 
 #[derive(Debug, Args)]
 pub struct SimArgs {
@@ -18,10 +19,19 @@ pub struct SimArgs {
     pub episodes: u32,
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Choose the task's version: `--set variant=uniform`, `--set release_at=0.9`,
+    /// `--set success=through`, `--set observe_grip=level` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_pair)]
+    pub options: Vec<(String, String)>,
 }
 
 pub fn run(args: SimArgs) -> anyhow::Result<()> {
-    let (summary, _) = run_episodes(args.task, args.policy, args.episodes, args.seed);
+    let mut options = EnvOptions::default();
+    for (k, v) in &args.options {
+        options.set(args.task, k, v).map_err(anyhow::Error::msg)?;
+    }
+    let (summary, _) =
+        run_episodes_with(args.task, &options, args.policy, args.episodes, args.seed);
     println!("{}", serde_json::to_string(&summary)?);
     Ok(())
 }

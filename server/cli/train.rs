@@ -207,7 +207,7 @@ pub fn drive(
     if !append {
         writeln!(
             csv,
-            "step,episode,return,cumulative_return,feedback_count,feedback_fraction"
+            "step,episode,return,length,outcome,cumulative_return,feedback_count,feedback_fraction"
         )?;
     }
     let mut episodes = Vec::new();
@@ -217,10 +217,12 @@ pub fn drive(
         if let Some(e) = report.episode {
             writeln!(
                 csv,
-                "{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{},{}",
                 e.step,
                 e.episode,
                 e.episode_return,
+                e.length,
+                e.outcome.id(),
                 e.cumulative_return,
                 e.feedback_count,
                 e.feedback_fraction
@@ -269,7 +271,7 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
                 .clone()
                 .unwrap_or_else(|| PathBuf::from(format!("models/{}.safetensors", args.task)));
             let expert = load_expert(&path, args.task)?;
-            let act_dim = args.task.make_env().spec().action_space.dim();
+            let act_dim = config.make_env().spec().action_space.dim();
             Box::new(ExpertOracle::new(expert, act_dim, args.oracle))
         }
     };

@@ -20,7 +20,7 @@ use super::query_rule::{QueryRule, UcbForm};
 use crate::rl::replay::{ReplayBuffer, Transition};
 use crate::rl::{HumanCriticConfig, Sac, SacConfig, UpdateStats};
 use crate::scene_graph::{AbstractState, SceneGraph};
-use crate::sim::{Env, Outcome, RenderState, Task};
+use crate::sim::{Env, EnvOptions, Outcome, RenderState, Task};
 
 /// DREF's query-rule constants (algorithms.md section 2, from the authors' configs).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -54,6 +54,18 @@ pub struct EvaluativeRunConfig {
     pub sac: SacConfig,
     pub query_rule: QueryRuleConfig,
     pub scene_graph: SceneGraph,
+    /// Which version of the task (tasks.md); configs written before it existed read as the
+    /// default.
+    #[serde(default)]
+    pub env: EnvOptions,
+    /// The learner stores `reward_scale * r` (the authors ran Reaching's SAC baseline at reward
+    /// 10, i.e. 0.1); episode returns and the cumulative reward stay on the env's scale.
+    #[serde(default = "unit_scale")]
+    pub reward_scale: f32,
+}
+
+fn unit_scale() -> f32 {
+    1.0
 }
 
 impl EvaluativeRunConfig {
@@ -72,10 +84,18 @@ impl EvaluativeRunConfig {
             sac,
             query_rule: QueryRuleConfig::for_task(task),
             scene_graph: SceneGraph::for_task(task),
+            env: EnvOptions::default(),
+            reward_scale: 1.0,
         }
     }
 
-    /// Override one hyper-parameter by name (`--set`, TOML files, the server's `params`): the query rule's and scene graph's keys here, every other key to SAC.
+    /// Build the run's env.
+    pub fn make_env(&self) -> Box<dyn Env> {
+        self.task.make_env_with(&self.env)
+    }
+
+    /// Override one hyper-parameter by name (`--set`, TOML files, the server's `params`): the
+    /// query rule's, scene graph's, env's and reward scale's keys here, every other key to SAC.
     pub fn set(&mut self, key: &str, value: &str) -> Result<(), String> {
         let bad = |what: &str| format!("{key}={value}: expected {what}");
         match key {
@@ -95,6 +115,14 @@ impl EvaluativeRunConfig {
                     _ => return Err(format!("{key} applies to lunar-lander only")),
                 }
             }
+            "reward_scale" => {
+                self.reward_scale = value
+                    .parse::<f32>()
+                    .ok()
+                    .filter(|x| x.is_finite() && *x > 0.0)
+                    .ok_or_else(|| bad("a positive number"))?
+            }
+            _ if EnvOptions::owns(key) => self.env.set(self.task, key, value)?,
             _ => self.sac.set(key, value)?,
         }
         Ok(())
@@ -164,7 +192,7 @@ impl EvaluativeRun {
     /// A fresh run whose replay buffer holds at most `min(buffer_size, steps)` transitions:
     /// a short run does not preallocate the full million rows.
     pub fn new(config: EvaluativeRunConfig, steps: u64) -> Self {
-        let mut env = config.task.make_env();
+        let mut env = config.make_env();
         let (obs_dim, act_dim) = (
             env.spec().observation_space.dim(),
             env.spec().action_space.dim(),
@@ -269,7 +297,7 @@ impl EvaluativeRun {
         let slot = self.replay.push(Transition {
             obs: &self.obs,
             action: &self.action,
-            reward: step.reward,
+            reward: step.reward * self.config.reward_scale,
             human: evaluation.map_or(0.0, Evaluation::value),
             next_obs: &step.obs,
             terminated: step.terminated,
@@ -353,8 +381,14 @@ impl EvaluativeRun {
 
 /// Mean return and success rate of `learner`'s deterministic policy (tanh of the mean) over
 /// `episodes` episodes with reset seeds `seed, seed + 1, ...`.
-pub fn evaluate_policy(task: Task, learner: &mut Sac, episodes: u32, seed: u64) -> (f64, f64) {
-    let mut env = task.make_env();
+pub fn evaluate_policy(
+    task: Task,
+    options: &EnvOptions,
+    learner: &mut Sac,
+    episodes: u32,
+    seed: u64,
+) -> (f64, f64) {
+    let mut env = task.make_env_with(options);
     let mut action = vec![0.0; env.spec().action_space.dim()];
     let (mut total, mut successes) = (0.0f64, 0u32);
     for i in 0..u64::from(episodes) {

@@ -142,7 +142,7 @@ impl EvaluativeRun {
         let episode_seeds: ChaCha8Rng = state.episode_seeds.restore().map_err(err)?;
         trainer.restore_state(&state.trainer).map_err(err)?;
 
-        let mut env = state.config.task.make_env();
+        let mut env = state.config.make_env();
         let act_dim = env.spec().action_space.dim();
         let obs = env.reset(state.episode_seed);
         let run = Self {

@@ -108,6 +108,7 @@ impl Scene {
                 ball_radius,
                 workspace,
                 no_entry,
+                ..
             } => {
                 log("world/table", &solid_boxes(&[*table], TABLE))?;
                 log("world/hoop", &solid_boxes(hoop_parts, HOOP))?;
@@ -173,6 +174,7 @@ impl Scene {
             RenderState::Placing {
                 gripper,
                 gripper_closed,
+                grip_level,
                 ball,
                 ball_held,
             } => {
@@ -189,6 +191,8 @@ impl Scene {
                     "gripper/closed",
                     &Scalars::single(f64::from(u8::from(*gripper_closed))),
                 )?;
+                // The gradual gripper's integrated command: the ball drops at the release level.
+                rec.log("gripper/level", &Scalars::single(f64::from(*grip_level)))?;
                 rec.log(
                     "world/ball",
                     &Points3D::new([*ball])

@@ -18,6 +18,8 @@ fn train_run(task: Task, method: &str, seed: u64, steps: u64, ends: &[(u64, f64)
             step,
             episode: i as u64,
             episode_return: 0.0,
+            length: None,
+            outcome: None,
             cumulative_return: cum,
             feedback_count: 0,
             feedback_fraction: 0.0,

@@ -37,6 +37,21 @@ impl Figure {
 /// The grid's name for "EF at DREF's rate": it becomes `ef-<p>` per task once p is known.
 pub const MATCHED_EF: &str = "ef-dref";
 
+/// The grid's name for plain SAC at the env's own reward scale. The `sac` row follows the
+/// authors, who ran Reaching's SAC baseline at reward 10 instead of 100 (`reward_scale=0.1`);
+/// this row is the fair control beside it (tasks.md). On the other tasks both rows are the same
+/// runs, so it is meant for `--tasks reaching`.
+pub const SAC_UNSCALED: &str = "sac-r100";
+
+/// The `--set` overrides a Figure 3 row adds on `task`, beyond the grid's own: the authors'
+/// reward scale for Reaching's SAC baseline.
+pub fn row_overrides(task: Task, method: &str) -> &'static [&'static str] {
+    match (task, method) {
+        (Task::Reaching, "sac") => &["reward_scale=0.1"],
+        _ => &[],
+    }
+}
+
 /// Queries per preference run (algorithms.md, section 3).
 pub const DEFAULT_QUERIES: u32 = 40;
 
@@ -84,7 +99,7 @@ impl GridConfig {
         for m in &self.methods {
             let ok = match self.figure {
                 Figure::Fig3 => {
-                    matches!(m.as_str(), "dref" | "sac" | MATCHED_EF)
+                    matches!(m.as_str(), "dref" | "sac" | MATCHED_EF | SAC_UNSCALED)
                         || m.strip_prefix("ef-")
                             .and_then(|p| p.parse::<f64>().ok())
                             .is_some_and(|p| (0.0..=100.0).contains(&p))
@@ -93,7 +108,7 @@ impl GridConfig {
             };
             if !ok {
                 let known = match self.figure {
-                    Figure::Fig3 => "dref, sac, ef-<p> (0 <= p <= 100), ef-dref",
+                    Figure::Fig3 => "dref, sac, sac-r100, ef-<p> (0 <= p <= 100), ef-dref",
                     Figure::Fig5 => "drpl, drpl-ss, fragment, full",
                 };
                 return Err(format!(
@@ -127,12 +142,18 @@ impl GridConfig {
             Figure::Fig3 => ("train", "--steps", self.steps_for(task).to_string()),
             Figure::Fig5 => ("prefs", "--queries", self.queries.to_string()),
         };
+        // The fair SAC control is plain `train --method sac` at the env's reward scale.
+        let train_method = if method == SAC_UNSCALED {
+            "sac"
+        } else {
+            method
+        };
         let mut args: Vec<String> = [
             command,
             "--task",
             task.id(),
             "--method",
-            method,
+            train_method,
             budget_flag,
             &budget,
             "--seed",
@@ -142,9 +163,17 @@ impl GridConfig {
         .map(str::to_owned)
         .into();
         args.push(dir.to_string_lossy().into_owned());
-        for kv in &self.sets {
+        let row = match self.figure {
+            Figure::Fig3 => row_overrides(task, method),
+            Figure::Fig5 => &[],
+        };
+        for kv in row
+            .iter()
+            .map(|s| s.to_string())
+            .chain(self.sets.iter().cloned())
+        {
             args.push("--set".into());
-            args.push(kv.clone());
+            args.push(kv);
         }
         RunSpec {
             task,

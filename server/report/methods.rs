@@ -12,6 +12,9 @@ pub enum Fig3Method {
     Ef50,
     Ef25,
     Sac,
+    /// Plain SAC at the env's reward scale, where the `Sac` row follows the authors' smaller
+    /// one (Reaching); no published counterpart.
+    SacUnscaled,
     /// EF at DREF's measured feedback rate, in percent: `ef-<p>` for any p other than the three
     /// fixed baselines. The grid names it after the rate it measured, so the name is the rule.
     EfMatched(f64),
@@ -26,6 +29,7 @@ impl Fig3Method {
             "ef-50" => Self::Ef50,
             "ef-25" => Self::Ef25,
             "sac" => Self::Sac,
+            "sac-r100" => Self::SacUnscaled,
             other => Self::EfMatched(other.strip_prefix("ef-")?.parse().ok()?),
         })
     }
@@ -39,6 +43,7 @@ impl Fig3Method {
             Self::Ef25 => 3,
             Self::Sac => 4,
             Self::EfMatched(_) => 5,
+            Self::SacUnscaled => 6,
         }
     }
 
@@ -60,6 +65,7 @@ pub fn display_name(method: &str) -> String {
     match Fig3Method::parse(method) {
         Some(Fig3Method::Dref) => "DREF".into(),
         Some(Fig3Method::Sac) => "SAC".into(),
+        Some(Fig3Method::SacUnscaled) => "SAC (reward 100)".into(),
         Some(_) => format!("EF-{}%", &method["ef-".len()..]),
         None => method.into(),
     }
@@ -121,18 +127,25 @@ pub struct Published {
 }
 
 /// The published value of `method` on `task` (algorithms.md, section 2, "What the published
-/// runs show").
-pub fn published_fig3(task: Task, method: Fig3Method) -> Published {
+/// runs show"), if the paper has that row.
+pub fn published_fig3(task: Task, method: Fig3Method) -> Option<Published> {
     // Columns: DREF, EF-100, EF-50, EF-25, SAC, EF at DREF's rate.
     let (row, dref_rate) = match task {
         Task::LunarLander => ([34.1, 29.1, 24.2, 18.7, 17.6, -6.0], 6.3),
         Task::Reaching => ([11.4, 11.4, 10.4, 9.6, 6.2, 10.2], 1.6),
         Task::Placing => ([43.3, 43.6, 23.4, 23.7, 16.4, 10.1], 8.4),
     };
-    Published {
-        cumulative_k: row[method.rank()],
+    Some(Published {
+        cumulative_k: *row.get(method.rank())?,
         feedback_pct: (method == Fig3Method::Dref).then_some(dref_rate),
-    }
+    })
+}
+
+/// The paper's ratio of `method`'s cumulative reward to EF-100's on `task` (the plotted values
+/// are all about a quarter of the true sums, so their ratios are the true ones).
+pub fn published_ratio(task: Task, method: Fig3Method) -> Option<f64> {
+    let ef100 = published_fig3(task, Fig3Method::Ef100)?.cumulative_k;
+    Some(published_fig3(task, method)?.cumulative_k / ef100)
 }
 
 /// The name under which the grid runs EF at a rate of `pct` percent: `ef-6.2`, `ef-0.35`.
@@ -196,14 +209,26 @@ mod tests {
 
     #[test]
     fn report_published_values_match_algorithms_md() {
-        let ll = published_fig3(Task::LunarLander, Fig3Method::Dref);
+        let ll = published_fig3(Task::LunarLander, Fig3Method::Dref).unwrap();
         assert_eq!(ll.cumulative_k, 34.1);
         assert_eq!(ll.feedback_pct, Some(6.3));
-        let p = published_fig3(Task::Placing, Fig3Method::EfMatched(8.4));
+        let p = published_fig3(Task::Placing, Fig3Method::EfMatched(8.4)).unwrap();
         assert_eq!((p.cumulative_k, p.feedback_pct), (10.1, None));
         assert_eq!(
-            published_fig3(Task::Reaching, Fig3Method::Sac).cumulative_k,
+            published_fig3(Task::Reaching, Fig3Method::Sac)
+                .unwrap()
+                .cumulative_k,
             6.2
         );
+        assert_eq!(
+            published_fig3(Task::Reaching, Fig3Method::SacUnscaled),
+            None
+        );
+        // algorithms.md's ratio rows, to two decimals.
+        let r = |t, m| (published_ratio(t, m).unwrap() * 100.0).round() / 100.0;
+        assert_eq!(r(Task::Reaching, Fig3Method::Sac), 0.54);
+        assert_eq!(r(Task::Placing, Fig3Method::Sac), 0.38);
+        assert_eq!(r(Task::LunarLander, Fig3Method::Dref), 1.17);
+        assert_eq!(r(Task::Placing, Fig3Method::EfMatched(8.4)), 0.23);
     }
 }

@@ -23,6 +23,12 @@ pub struct EpisodeRow {
     pub episode: u64,
     #[serde(rename = "return")]
     pub episode_return: f64,
+    /// Steps of the episode (absent from files written before it was a column).
+    #[serde(default)]
+    pub length: Option<u32>,
+    /// How the episode ended: success, failure or time_limit (absent from older files).
+    #[serde(default)]
+    pub outcome: Option<crate::sim::Outcome>,
     pub cumulative_return: f64,
     pub feedback_count: u64,
     /// Share of environment steps so far with feedback, in [0, 1].

@@ -4,7 +4,9 @@
 use std::fmt::Write;
 
 use super::aggregate::{Fig3Task, Fig5Task};
-use super::methods::{Fig3Method, display_name, paper_steps, published_fig3, task_title};
+use super::methods::{
+    Fig3Method, Published, display_name, paper_steps, published_fig3, published_ratio, task_title,
+};
 use super::stats::MeanSe;
 
 /// A cumulative reward as the paper prints it: in thousands with one decimal ("34.1k") when
@@ -55,9 +57,20 @@ fn fmt_steps(steps: u64) -> String {
 const FIG3_INTRO: &str = "\
 Cumulative reward summed over all finished episodes at the end of training, mean ± standard \
 error over seeds; feedback is the share of environment steps on which the oracle answered. \
-\"Paper\" is the published run (algorithms.md, section 2). Our simulators are not the paper's, \
-so compare ratios between methods, not absolute values.
+\"Paper\" is the published run (algorithms.md, section 2) as plotted, about a quarter of its \
+true sum. Our simulators are not the paper's, so compare the ratios to EF-100%: ours (of our \
+true sums) beside the paper's.
 ";
+
+/// `value / reference` to two decimals, or "–" when either is missing or the reference is 0.
+fn fmt_ratio(value: Option<f64>, reference: Option<f64>) -> String {
+    match (value, reference) {
+        (Some(v), Some(r)) if r != 0.0 && v.is_finite() && r.is_finite() => {
+            format!("{:.2}", v / r)
+        }
+        _ => "–".into(),
+    }
+}
 
 /// The Figure 3 table: one section per task, rows in legend order, plus a row for every
 /// published method this grid has not run (so the paper's column is always complete).
@@ -76,13 +89,18 @@ pub fn fig3_table(tasks: &[Fig3Task]) -> String {
         let _ = write!(
             out,
             "\n## {}: {} steps (paper: {})\n\n\
-             | Method | Cumulative reward | Feedback | Seeds | Paper |\n\
-             |---|---:|---:|---:|---:|\n",
+             | Method | Cumulative reward | Feedback | Seeds | Ratio to EF-100% | Paper's ratio | Paper |\n\
+             |---|---:|---:|---:|---:|---:|---:|\n",
             task_title(task.task),
             ours,
             fmt_steps(paper_steps(task.task)),
         );
         let thousands = uses_thousands(task);
+        let ef100 = task
+            .methods
+            .iter()
+            .find(|m| Fig3Method::parse(&m.method) == Some(Fig3Method::Ef100))
+            .map(|m| m.final_return.mean);
         let mut rows: Vec<(usize, String)> = Vec::new();
         for m in &task.methods {
             let kind = Fig3Method::parse(&m.method);
@@ -91,11 +109,14 @@ pub fn fig3_table(tasks: &[Fig3Task]) -> String {
                 name.push_str(" (DREF's rate)");
             }
             let paper = kind.map_or("–".into(), |k| fmt_published(task.task, k));
+            let paper_ratio = kind.and_then(|k| published_ratio(task.task, k));
             let row = format!(
-                "| {name} | {} | {} | {} | {paper} |\n",
+                "| {name} | {} | {} | {} | {} | {} | {paper} |\n",
                 fmt_reward(m.final_return, thousands),
                 fmt_pct(m.feedback_pct),
                 m.final_return.n,
+                fmt_ratio(Some(m.final_return.mean), ef100),
+                fmt_ratio(paper_ratio, Some(1.0)),
             );
             rows.push((kind.map_or(100, Fig3Method::rank), row));
         }
@@ -115,10 +136,14 @@ pub fn fig3_table(tasks: &[Fig3Task]) -> String {
                     Fig3Method::Ef100 => "EF-100%".into(),
                     Fig3Method::Ef50 => "EF-50%".into(),
                     Fig3Method::Ef25 => "EF-25%".into(),
-                    Fig3Method::Sac => "SAC".into(),
+                    Fig3Method::Sac | Fig3Method::SacUnscaled => "SAC".into(),
                 };
                 let paper = fmt_published(task.task, kind);
-                rows.push((kind.rank(), format!("| {name} | – | – | 0 | {paper} |\n")));
+                let ratio = fmt_ratio(published_ratio(task.task, kind), Some(1.0));
+                rows.push((
+                    kind.rank(),
+                    format!("| {name} | – | – | 0 | – | {ratio} | {paper} |\n"),
+                ));
             }
         }
         // Stable: our rows keep their legend order, missing ones slot in at the paper's place.
@@ -131,10 +156,13 @@ pub fn fig3_table(tasks: &[Fig3Task]) -> String {
 }
 
 fn fmt_published(task: crate::sim::Task, method: Fig3Method) -> String {
-    let p = published_fig3(task, method);
-    match p.feedback_pct {
-        Some(pct) => format!("{:.1}k ({pct:.1} %)", p.cumulative_k),
-        None => format!("{:.1}k", p.cumulative_k),
+    match published_fig3(task, method) {
+        Some(Published {
+            cumulative_k,
+            feedback_pct: Some(pct),
+        }) => format!("{cumulative_k:.1}k ({pct:.1} %)"),
+        Some(p) => format!("{:.1}k", p.cumulative_k),
+        None => "–".into(),
     }
 }
 

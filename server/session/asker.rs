@@ -13,7 +13,7 @@ use crate::guidance::drpl::trajectories::Trajectory;
 use crate::guidance::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
 use crate::rl::Sac;
 use crate::scene_graph::SceneGraph;
-use crate::sim::Task;
+use crate::sim::{EnvOptions, Task};
 
 use super::events::{
     AnswerValue, Controls, Observer, Revision, SessionEvent, SessionSink, StoredRevision,
@@ -224,6 +224,8 @@ impl EvaluativeTrainer for EvaluativeAsker {
 pub(super) enum Comparer {
     Human {
         task: Task,
+        /// The task's version, to replay the clips in the env they were recorded in.
+        env: EnvOptions,
         graph: SceneGraph,
         trajectories: Vec<Trajectory>,
     },
@@ -244,6 +246,7 @@ impl PreferenceTrainer for PreferenceAsker {
         match &mut self.comparer {
             Comparer::Human {
                 task,
+                env,
                 graph,
                 trajectories,
             } => self
@@ -254,9 +257,15 @@ impl PreferenceTrainer for PreferenceAsker {
                     "preference",
                     describe_preference(graph, q),
                     || QueryContent::Preference {
-                        left: query::render_clip(*task, &trajectories[q.left.trajectory], q.left),
+                        left: query::render_clip(
+                            *task,
+                            env,
+                            &trajectories[q.left.trajectory],
+                            q.left,
+                        ),
                         right: query::render_clip(
                             *task,
+                            env,
                             &trajectories[q.right.trajectory],
                             q.right,
                         ),

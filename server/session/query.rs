@@ -9,7 +9,7 @@ use serde::Serialize;
 use crate::guidance::drpl::pool;
 use crate::guidance::drpl::trajectories::Trajectory;
 use crate::scene_graph::{AbstractState, Predicate, SceneGraph};
-use crate::sim::{Geometry, RenderState, Task};
+use crate::sim::{EnvOptions, Geometry, RenderState, Task};
 
 /// A short stretch of an episode for a browser to loop.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -84,8 +84,13 @@ impl FrameHistory {
 
 /// Replays `clip`'s steps of `trajectory` in a fresh env: the state before its first step and
 /// after each of its steps.
-pub fn render_clip(task: Task, trajectory: &Trajectory, clip: &pool::Clip) -> Clip {
-    let mut env = task.make_env();
+pub fn render_clip(
+    task: Task,
+    options: &EnvOptions,
+    trajectory: &Trajectory,
+    clip: &pool::Clip,
+) -> Clip {
+    let mut env = task.make_env_with(options);
     env.reset(trajectory.reset_seed);
     let geometry = env.geometry();
     let mut frames = Vec::with_capacity(clip.len() + 1);
@@ -131,8 +136,14 @@ mod tests {
     #[test]
     fn a_rendered_clip_replays_the_recorded_steps() {
         let graph = SceneGraph::for_task(Task::LunarLander);
-        let trajs =
-            trajectories::collect(Task::LunarLander, &graph, 1, 60, &mut trajectories::rng(5));
+        let trajs = trajectories::collect(
+            Task::LunarLander,
+            &EnvOptions::default(),
+            &graph,
+            1,
+            60,
+            &mut trajectories::rng(5),
+        );
         let t = &trajs[0];
         let c = pool::Clip {
             trajectory: 0,
@@ -142,7 +153,7 @@ mod tests {
             features: vec![],
             raw_features: vec![],
         };
-        let clip = render_clip(Task::LunarLander, t, &c);
+        let clip = render_clip(Task::LunarLander, &EnvOptions::default(), t, &c);
         // The state before step 10, then after each of steps 10..20.
         assert_eq!(clip.frames.len(), 11);
         // The last frame is the state after step 19, whose observation the trajectory recorded.

@@ -321,6 +321,7 @@ fn run_preference(
     let comparer = match spec.trainer {
         TrainerKind::Human => Comparer::Human {
             task: spec.task,
+            env: run.config().env,
             graph: run.config().scene_graph,
             trajectories,
         },

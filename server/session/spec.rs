@@ -139,7 +139,9 @@ pub enum RunConfig {
     Preference(PreferenceRunConfig),
 }
 
-const SETTING_KEYS: [&str; 4] = [
+const SETTING_KEYS: [&str; 6] = [
+    "record",
+    "rerun_connect",
     "pace_hz",
     "answer_timeout_s",
     "checkpoint_every",
@@ -306,6 +308,36 @@ mod tests {
                 .contains("pace_hz")
         );
         assert!(spec("dref", json!({"pace_hz": "fast"})).validate().is_err());
+    }
+
+    #[test]
+    fn recording_settings_are_session_settings_not_hyper_parameters() {
+        // The README documents both; they must not reach the algorithm's `set`.
+        for method in ["dref", "drpl"] {
+            let s = spec(
+                method,
+                json!({"record": false, "rerun_connect": "rerun+http://127.0.0.1:9876/proxy"}),
+            );
+            s.validate().unwrap();
+            assert!(!s.settings().unwrap().record);
+        }
+        assert!(spec("dref", json!({"record": "no"})).validate().is_err());
+    }
+
+    #[test]
+    fn task_variants_reach_the_env() {
+        let s = spec("dref", json!({"variant": "uniform", "reward_scale": 0.1}));
+        let RunConfig::Evaluative(config) = s.run_config().unwrap() else {
+            panic!("dref is evaluative")
+        };
+        assert_eq!(config.env.variant, crate::sim::Variant::Uniform);
+        assert_eq!(config.reward_scale, 0.1);
+        assert!(
+            spec("dref", json!({"variant": "robosuite"}))
+                .validate()
+                .is_err()
+        );
+        assert!(spec("drpl", json!({"release_at": 0.9})).validate().is_err());
     }
 
     #[test]

@@ -61,6 +61,17 @@ pub enum Outcome {
     TimeLimit,
 }
 
+impl Outcome {
+    /// The name files and the API use (as serde writes it).
+    pub fn id(self) -> &'static str {
+        match self {
+            Outcome::Success => "success",
+            Outcome::Failure => "failure",
+            Outcome::TimeLimit => "time_limit",
+        }
+    }
+}
+
 /// The result of one `Env::step`, with Gymnasium's meaning of the flags: `terminated` is a true
 /// end of the MDP (bootstrap stops), `truncated` is the time limit (bootstrap continues).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -122,6 +133,9 @@ pub enum Geometry {
         opening: [f32; 4],
         hoop_top_z: f32,
         ball_radius: f32,
+        /// The grip level at or below which the ball drops (`RenderState::Placing::grip_level`).
+        #[serde(default = "fully_open")]
+        release_level: f32,
         /// The safety gate's workspace `[x_min, y_min, z_min, x_max, y_max, z_max]`.
         workspace: [f32; 6],
         /// The no-entry box under and beside the hoop, same layout as `workspace`.
@@ -152,6 +166,10 @@ pub enum RenderState {
     Placing {
         gripper: Pose3,
         gripper_closed: bool,
+        /// The gripper's integrated command c: +1 closed, -1 fully open; the ball drops at the
+        /// geometry's `release_level`.
+        #[serde(default = "closed")]
+        grip_level: f32,
         ball: [f32; 3],
         /// True while the ball is held by the gripper.
         ball_held: bool,
@@ -189,4 +207,13 @@ pub trait Env: Send {
     fn render(&self) -> RenderState;
 
     fn geometry(&self) -> Geometry;
+}
+
+/// Serde defaults for render files written before the gradual gripper existed.
+fn fully_open() -> f32 {
+    -1.0
+}
+
+fn closed() -> f32 {
+    1.0
 }

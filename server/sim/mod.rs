@@ -2,12 +2,14 @@
 //!
 //! - `env`: the `Env` trait, spaces, `Step`, render state and geometry.
 //! - `task`: the `Task` enum that names the three tasks and builds them.
+//! - `options`: which version of a table-top task to build (the authors' or the first one).
 //! - `reaching`, `placing`: table-top tasks on rapier3d (`tabletop` holds their shared world).
 //! - `lunar_lander`: Gymnasium's `LunarLanderContinuous-v3` on rapier2d.
 //! - `rollout`: run a random or heuristic policy for whole episodes and summarise them.
 
 mod env;
 pub mod lunar_lander;
+mod options;
 pub mod placing;
 pub mod reaching;
 pub mod rollout;
@@ -15,4 +17,8 @@ mod tabletop;
 mod task;
 
 pub use env::{BoxSpace, Cuboid, Env, EnvSpec, Geometry, Outcome, Pose2, Pose3, RenderState, Step};
+pub use options::{
+    DEFAULT_RELEASE_AT, EnvOptions, GripObservation, KEYS as ENV_OPTION_KEYS, PlacingSuccess,
+    Variant,
+};
 pub use task::{Task, UnknownTask};

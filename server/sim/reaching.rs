@@ -1,11 +1,12 @@
 //! Reaching: move the gripper over the table into the goal area at the table's centre.
 //!
-//! - obs = gripper (x, y); action in `[-1, 1]^2`, a full action moves 5 mm per 50 ms step.
+//! - obs = gripper (x, y); action in `[-1, 1]^2`, a full action moves 1.2 cm per 50 ms step
+//!   \[authors\] (5 mm in the first version, `variant = "uniform"`).
 //! - Safety gate: a move that would leave the table (`|x| < 0.38`, `|y| < 0.35`) is zeroed.
-//! - Reset: a uniform start on the table outside the goal area, then 100 small random moves
-//!   (uniform `±0.05` actions, through the gate) that count toward the 1000-step horizon. If
-//!   those moves end inside the goal area, the reset draws a new start (same seed stream), so an
-//!   episode never starts solved.
+//! - Reset \[authors\]: the robot's home pose (-0.23, 0), then 100 small random moves (uniform
+//!   `±0.05` actions, through the gate) that count toward the 1000-step horizon. The uniform
+//!   variant starts anywhere on the table outside the goal area instead, and redraws a start
+//!   whose random moves end inside the goal, so an episode never starts solved.
 //! - +100 and termination on entering the goal area, 0 otherwise.
 //!
 //! The gripper is a kinematic body in the shared table-top world; nothing dynamic moves here,
@@ -17,7 +18,7 @@ use rand_chacha::ChaCha8Rng;
 use super::tabletop::{
     self, CONTROL_HZ, MAX_EPISODE_STEPS, Region, TABLE_TOP_Z, TableWorld, clip_action, gated_move,
 };
-use super::{BoxSpace, Env, EnvSpec, Geometry, Outcome, RenderState, Step};
+use super::{BoxSpace, Env, EnvSpec, Geometry, Outcome, RenderState, Step, Variant};
 
 /// Half widths of the goal area (the scene graph's band edges are the same numbers).
 pub const GOAL_HALF_X: f32 = 0.05;
@@ -25,8 +26,12 @@ pub const GOAL_HALF_Y: f32 = 0.125;
 /// Half sizes of the table top, which is also the safety gate's rectangle.
 pub const TABLE_HALF_X: f32 = 0.38;
 pub const TABLE_HALF_Y: f32 = 0.35;
-/// Gripper travel per step at full action.
-pub const STEP_SIZE: f32 = 0.005;
+/// Gripper travel per step at full action \[authors: their expert moves 1.16 cm per step\].
+pub const STEP_SIZE: f32 = 0.012;
+/// The first version's travel per step (`variant = "uniform"`).
+pub const UNIFORM_STEP_SIZE: f32 = 0.005;
+/// The robot's home pose over the table \[authors\], where every episode starts.
+pub const HOME: [f32; 2] = [-0.23, 0.0];
 /// Steps the reset spends on random moves (they count toward the horizon).
 pub const RESET_STEPS: u32 = 100;
 /// Size of the reset's random actions.
@@ -45,20 +50,34 @@ pub fn in_goal(p: [f32; 2]) -> bool {
     p[0].abs() <= GOAL_HALF_X && p[1].abs() <= GOAL_HALF_Y
 }
 
+/// Travel per step at full action in `variant`.
+pub fn step_size(variant: Variant) -> f32 {
+    match variant {
+        Variant::Authors => STEP_SIZE,
+        Variant::Uniform => UNIFORM_STEP_SIZE,
+    }
+}
+
 /// The gripper after action `a` (already clipped) from `p`, through the safety gate.
-fn gated(p: [f32; 2], a: [f32; 2]) -> [f32; 2] {
-    gated_move(p, a, STEP_SIZE, STEP_SIZE, |q| WORKSPACE.contains(q))
+fn gated(p: [f32; 2], a: [f32; 2], step: f32) -> [f32; 2] {
+    gated_move(p, a, step, step, |q| WORKSPACE.contains(q))
 }
 
 pub struct Reaching {
     spec: EnvSpec,
+    variant: Variant,
     world: TableWorld,
     elapsed: u32,
     done: bool,
 }
 
 impl Reaching {
+    /// The authors' Reaching (the default).
     pub fn new() -> Self {
+        Self::with_variant(Variant::Authors)
+    }
+
+    pub fn with_variant(variant: Variant) -> Self {
         let spec = EnvSpec {
             id: "reaching",
             observation_space: BoxSpace {
@@ -75,6 +94,7 @@ impl Reaching {
         let world = Self::build_world([-0.3, -0.3]);
         Self {
             spec,
+            variant,
             world,
             elapsed: 0,
             done: true,
@@ -118,22 +138,26 @@ impl Env for Reaching {
 
     fn reset(&mut self, seed: u64) -> Vec<f32> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let step = step_size(self.variant);
         let p = loop {
-            let mut p = loop {
-                let p = [
-                    rng.random_range(-TABLE_HALF_X..TABLE_HALF_X),
-                    rng.random_range(-TABLE_HALF_Y..TABLE_HALF_Y),
-                ];
-                if !in_goal(p) {
-                    break p;
-                }
+            let mut p = match self.variant {
+                Variant::Authors => HOME,
+                Variant::Uniform => loop {
+                    let p = [
+                        rng.random_range(-TABLE_HALF_X..TABLE_HALF_X),
+                        rng.random_range(-TABLE_HALF_Y..TABLE_HALF_Y),
+                    ];
+                    if !in_goal(p) {
+                        break p;
+                    }
+                },
             };
             for _ in 0..RESET_STEPS {
                 let a = [
                     rng.random_range(-RESET_ACTION..=RESET_ACTION),
                     rng.random_range(-RESET_ACTION..=RESET_ACTION),
                 ];
-                p = gated(p, a);
+                p = gated(p, a, step);
             }
             // A start the random moves pushed into the goal would be a free success: redraw.
             if !in_goal(p) {
@@ -152,7 +176,7 @@ impl Env for Reaching {
             "step called after the episode ended; call reset"
         );
         let a = clip_action::<2>(action);
-        let p = gated(self.gripper_xy(), a);
+        let p = gated(self.gripper_xy(), a, step_size(self.variant));
         self.set_gripper_xy(p);
         self.elapsed += 1;
         let event = in_goal(p).then_some(Outcome::Success);
@@ -184,7 +208,9 @@ impl Env for Reaching {
     }
 }
 
-/// Go to the goal's centre: a proportional controller that saturates more than one step away.
+/// Go to the goal's centre: a proportional controller that saturates more than one step away
+/// (a 1.2 cm step; with the uniform variant's 5 mm steps it saturates all the way in, which
+/// the goal's 10 cm width makes harmless).
 pub fn heuristic(obs: &[f32]) -> [f32; 2] {
     [
         (-obs[0] / STEP_SIZE).clamp(-1.0, 1.0),
@@ -218,19 +244,44 @@ mod tests {
 
     #[test]
     fn reset_starts_outside_the_goal_after_100_moves() {
+        for variant in [Variant::Authors, Variant::Uniform] {
+            let mut env = Reaching::with_variant(variant);
+            for seed in 0..200 {
+                let obs = env.reset(seed);
+                assert!(!in_goal([obs[0], obs[1]]));
+                assert!(WORKSPACE.contains(&[obs[0], obs[1]]));
+                assert_eq!(env.elapsed_steps(), RESET_STEPS);
+            }
+        }
+    }
+
+    #[test]
+    fn authors_reset_stays_near_home() {
+        // 100 moves of at most 5 % of 1.2 cm: at most 6 cm from home per axis.
         let mut env = Reaching::new();
-        for seed in 0..200 {
+        for seed in 0..50 {
             let obs = env.reset(seed);
-            assert!(!in_goal([obs[0], obs[1]]));
-            assert!(WORKSPACE.contains(&[obs[0], obs[1]]));
-            assert_eq!(env.elapsed_steps(), RESET_STEPS);
+            assert!((obs[0] - HOME[0]).abs() <= 0.06 && (obs[1] - HOME[1]).abs() <= 0.06);
+        }
+        let mut far = Reaching::with_variant(Variant::Uniform);
+        let spread = (0..50).any(|seed| (far.reset(seed)[0] - HOME[0]).abs() > 0.2);
+        assert!(spread, "the uniform variant starts anywhere on the table");
+    }
+
+    #[test]
+    fn a_full_action_moves_one_step_size() {
+        for variant in [Variant::Authors, Variant::Uniform] {
+            let mut env = Reaching::with_variant(variant);
+            let obs = env.reset(1);
+            let next = env.step(&[0.0, 1.0]).obs;
+            assert!((next[1] - obs[1] - step_size(variant)).abs() < 1e-6);
         }
     }
 
     #[test]
     fn heuristic_saturates_far_away_and_is_proportional_near() {
         assert_eq!(heuristic(&[0.3, -0.2]), [-1.0, 1.0]);
-        let a = heuristic(&[0.0025, -0.001]);
+        let a = heuristic(&[0.006, -0.0024]);
         assert!((a[0] + 0.5).abs() < 1e-6 && (a[1] - 0.2).abs() < 1e-6);
     }
 

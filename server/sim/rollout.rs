@@ -9,7 +9,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use super::{Env, Outcome, Task};
+use super::{Env, EnvOptions, Outcome, Task};
 
 /// The policies that need no learning.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -94,6 +94,9 @@ pub fn run_episode(env: &mut dyn Env, task: Task, policy: SimplePolicy, seed: u6
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SimSummary {
     pub task: Task,
+    /// The table-top task's version (none for Lunar Lander).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub env: Option<EnvOptions>,
     pub policy: SimplePolicy,
     pub episodes: u32,
     pub mean_return: f64,
@@ -104,15 +107,27 @@ pub struct SimSummary {
     pub steps_per_second: f64,
 }
 
-/// Run `episodes` episodes with seeds `seed, seed + 1, ...` and summarise them.
+/// Run `episodes` episodes of the task's default version with seeds `seed, seed + 1, ...` and
+/// summarise them.
 pub fn run_episodes(
     task: Task,
     policy: SimplePolicy,
     episodes: u32,
     seed: u64,
 ) -> (SimSummary, Vec<Episode>) {
+    run_episodes_with(task, &EnvOptions::default(), policy, episodes, seed)
+}
+
+/// As [`run_episodes`], on the version of the task that `options` choose.
+pub fn run_episodes_with(
+    task: Task,
+    options: &EnvOptions,
+    policy: SimplePolicy,
+    episodes: u32,
+    seed: u64,
+) -> (SimSummary, Vec<Episode>) {
     assert!(episodes > 0, "need at least one episode");
-    let mut env = task.make_env();
+    let mut env = task.make_env_with(options);
     let start = Instant::now();
     let runs: Vec<Episode> = (0..u64::from(episodes))
         .map(|i| run_episode(env.as_mut(), task, policy, seed.wrapping_add(i)))
@@ -132,6 +147,7 @@ pub fn run_episodes(
         .count();
     let summary = SimSummary {
         task,
+        env: (task != Task::LunarLander).then_some(*options),
         policy,
         episodes,
         mean_return,

@@ -5,7 +5,7 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
-use super::{Env, lunar_lander, placing, reaching};
+use super::{Env, EnvOptions, lunar_lander, placing, reaching};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -27,10 +27,16 @@ impl Task {
         }
     }
 
+    /// The task's default env (the authors' version of each table-top task).
     pub fn make_env(self) -> Box<dyn Env> {
+        self.make_env_with(&EnvOptions::default())
+    }
+
+    /// The task's env built with `options` (Lunar Lander has none and ignores them).
+    pub fn make_env_with(self, options: &EnvOptions) -> Box<dyn Env> {
         match self {
-            Task::Reaching => Box::new(reaching::Reaching::new()),
-            Task::Placing => Box::new(placing::Placing::new()),
+            Task::Reaching => Box::new(reaching::Reaching::with_variant(options.variant)),
+            Task::Placing => Box::new(placing::Placing::with_options(*options)),
             Task::LunarLander => Box::new(lunar_lander::LunarLander::new()),
         }
     }

@@ -168,7 +168,25 @@ function tableTop(ctx, T, table) {
   ctx.stroke();
 }
 
-function gripperFromAbove(ctx, T, x, y, closed, dpr) {
+/**
+ * How far Placing's gripper is open, 0 (closed) to 1: the gripper opens gradually, and the ball
+ * drops when its level reaches the geometry's release level, so the fingers show the way there.
+ * Render files written before the gradual gripper carry only `gripper_closed`.
+ */
+function openness(g, s) {
+  if (!s.ball_held) return 1;
+  if (typeof s.grip_level !== "number") return s.gripper_closed ? 0 : 1;
+  const release = typeof g.release_level === "number" ? g.release_level : -1;
+  return Math.max(0, Math.min(1, (1 - s.grip_level) / Math.max(1e-6, 1 - release)));
+}
+
+/** Fingers' gap: `open` 0 is closed, 1 fully open (booleans read as 0 or 1). */
+function fingerGap(width, open, closedFrac, openFrac) {
+  const o = typeof open === "boolean" ? (open ? 1 : 0) : open;
+  return width * (closedFrac + (openFrac - closedFrac) * o);
+}
+
+function gripperFromAbove(ctx, T, x, y, open, dpr) {
   const r = Math.max(9 * dpr, 0.022 * T.s);
   const px = T.x(x);
   const py = T.y(y);
@@ -177,19 +195,19 @@ function gripperFromAbove(ctx, T, x, y, closed, dpr) {
   ctx.beginPath();
   ctx.arc(px, py, r, 0, Math.PI * 2);
   ctx.fill();
-  // Two fingers, apart when open.
-  const gap = closed ? r * 0.35 : r * 0.9;
+  // Two fingers, apart as the gripper opens.
+  const gap = fingerGap(r, open, 0.35, 0.9);
   ctx.fillStyle = COLORS.finger;
   ctx.fillRect(px - gap - r * 0.3, py - r * 1.25, r * 0.3, r * 2.5);
   ctx.fillRect(px + gap, py - r * 1.25, r * 0.3, r * 2.5);
   ctx.restore();
 }
 
-function gripperFromSide(ctx, T, x, z, closed, dpr) {
+function gripperFromSide(ctx, T, x, z, open, dpr) {
   const px = T.x(x);
   const pz = T.y(z);
   const w = Math.max(8 * dpr, 0.03 * T.s);
-  const gap = closed ? w * 0.35 : w * 0.85;
+  const gap = fingerGap(w, open, 0.35, 0.85);
   ctx.save();
   ctx.fillStyle = COLORS.gripper;
   ctx.fillRect(px - 3 * dpr, 0, 6 * dpr, pz - w * 0.6); // the arm from above
@@ -247,7 +265,7 @@ function drawReaching(ctx, T, g, s, opts, dpr) {
   if (!s) return;
   trailPath(ctx, T, (opts.trail || []).map((t) => [t.gripper.position[0], t.gripper.position[1]]), dpr);
   const [x, y] = s.gripper.position;
-  gripperFromAbove(ctx, T, x, y, true, dpr);
+  gripperFromAbove(ctx, T, x, y, false, dpr);
   if (opts.action) arrow(ctx, T.x(x), T.y(y), clamp(opts.action[0]) * ARROW_PX * dpr, -clamp(opts.action[1]) * ARROW_PX * dpr, dpr);
 }
 
@@ -278,7 +296,7 @@ function drawPlacingTop(ctx, T, g, s, opts, dpr) {
   trailPath(ctx, T, (opts.trail || []).map((t) => [t.gripper.position[0], t.gripper.position[1]]), dpr);
   const [x, y] = s.gripper.position;
   if (!s.ball_held) ball(ctx, T, s.ball[0], s.ball[1], g.ball_radius, dpr);
-  gripperFromAbove(ctx, T, x, y, s.gripper_closed, dpr);
+  gripperFromAbove(ctx, T, x, y, openness(g, s), dpr);
   if (s.ball_held) ball(ctx, T, s.ball[0], s.ball[1], g.ball_radius * 0.8, dpr);
   if (opts.action) arrow(ctx, T.x(x), T.y(y), clamp(opts.action[0]) * ARROW_PX * dpr, -clamp(opts.action[1]) * ARROW_PX * dpr, dpr);
 }
@@ -319,8 +337,14 @@ function drawPlacingSide(ctx, T, g, s, opts, dpr) {
   if (!s) return;
   trailPath(ctx, T, (opts.trail || []).map((f) => [f.gripper.position[0], f.gripper.position[2]]), dpr);
   const [x, , z] = s.gripper.position;
-  gripperFromSide(ctx, T, x, z, s.gripper_closed, dpr);
+  const open = openness(g, s);
+  gripperFromSide(ctx, T, x, z, open, dpr);
   ball(ctx, T, s.ball[0], s.ball[2], g.ball_radius, dpr);
+  // How far the gripper has opened toward letting the ball go.
+  ctx.fillStyle = COLORS.hoopEdge;
+  ctx.font = `${11 * dpr}px system-ui, sans-serif`;
+  const grip = s.ball_held ? (open > 0 ? `gripper ${Math.round(open * 100)} % open to release` : "gripper closed") : "ball released";
+  ctx.fillText(grip, 6 * dpr, 14 * dpr);
   if (opts.action) arrow(ctx, T.x(x), T.y(z), clamp(opts.action[0]) * ARROW_PX * dpr, -clamp(opts.action[2]) * ARROW_PX * dpr, dpr);
 }
 

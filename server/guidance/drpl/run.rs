@@ -20,7 +20,7 @@ use super::selection::{QueryMethod, QueryPair, Selector};
 use super::trainer::{Preference, PreferenceQuery, PreferenceTrainer};
 use super::trajectories::{self, DEFAULT_TRAJECTORIES};
 use crate::scene_graph::SceneGraph;
-use crate::sim::Task;
+use crate::sim::{EnvOptions, Task};
 
 /// ChaCha streams of a run's seed (stream 1 is `trajectories::rng`).
 const THETA_STREAM: u64 = 2;
@@ -42,6 +42,9 @@ pub struct PreferenceRunConfig {
     pub acquisition: Acquisition,
     pub belief: BeliefConfig,
     pub scene_graph: SceneGraph,
+    /// Which version of the task the trajectories come from (tasks.md).
+    #[serde(default)]
+    pub env: EnvOptions,
 }
 
 impl PreferenceRunConfig {
@@ -57,6 +60,7 @@ impl PreferenceRunConfig {
             acquisition: Acquisition::Uniform,
             belief: BeliefConfig::default(),
             scene_graph: SceneGraph::for_task(task),
+            env: EnvOptions::default(),
         }
     }
 
@@ -101,11 +105,12 @@ impl PreferenceRunConfig {
                     _ => return Err(format!("{key} applies to lunar-lander only")),
                 }
             }
+            _ if EnvOptions::owns(key) => self.env.set(self.task, key, value)?,
             _ => {
                 return Err(format!(
                     "unknown setting {key:?} for prefs: expected trajectories, max_steps, \
                      min_run, acquisition, beta, delta, proposal_std, burn_in, thinning, \
-                     samples or side_engines_on_a0"
+                     samples, side_engines_on_a0, variant, success, observe_grip or release_at"
                 ));
             }
         }
@@ -163,6 +168,7 @@ impl PreferenceRun {
     pub fn record_trajectories(config: &PreferenceRunConfig) -> Vec<trajectories::Trajectory> {
         trajectories::collect(
             config.task,
+            &config.env,
             &config.scene_graph,
             config.trajectories,
             config.max_steps,

@@ -6,7 +6,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::scene_graph::{AbstractState, SceneGraph};
-use crate::sim::Task;
+use crate::sim::{EnvOptions, Task};
 
 /// Trajectories per run when not overridden.
 pub const DEFAULT_TRAJECTORIES: usize = 100;
@@ -51,12 +51,13 @@ impl Trajectory {
 /// from `rng` alone: it draws each reset seed and then that trajectory's actions.
 pub fn collect(
     task: Task,
+    options: &EnvOptions,
     graph: &SceneGraph,
     count: usize,
     max_steps: usize,
     rng: &mut ChaCha8Rng,
 ) -> Vec<Trajectory> {
-    let mut env = task.make_env();
+    let mut env = task.make_env_with(options);
     let act_dim = env.spec().action_space.dim();
     (0..count)
         .map(|_| {
@@ -99,7 +100,7 @@ mod tests {
     fn steps_chain_and_carry_the_scene_graph() {
         let task = Task::Reaching;
         let graph = SceneGraph::for_task(task);
-        let trajs = collect(task, &graph, 3, 20, &mut rng(7));
+        let trajs = collect(task, &EnvOptions::default(), &graph, 3, 20, &mut rng(7));
         assert_eq!(trajs.len(), 3);
         for t in &trajs {
             assert!(!t.is_empty() && t.len() <= 20);
@@ -118,9 +119,9 @@ mod tests {
     fn reproducible_from_the_seed() {
         let task = Task::Placing;
         let graph = SceneGraph::for_task(task);
-        let a = collect(task, &graph, 2, 30, &mut rng(3));
-        let b = collect(task, &graph, 2, 30, &mut rng(3));
-        let c = collect(task, &graph, 2, 30, &mut rng(4));
+        let a = collect(task, &EnvOptions::default(), &graph, 2, 30, &mut rng(3));
+        let b = collect(task, &EnvOptions::default(), &graph, 2, 30, &mut rng(3));
+        let c = collect(task, &EnvOptions::default(), &graph, 2, 30, &mut rng(4));
         assert_eq!(a, b);
         assert_ne!(a, c);
     }

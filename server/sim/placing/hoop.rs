@@ -27,11 +27,16 @@ pub(crate) const NO_ENTRY: Region<3> = Region {
     lo: [-0.17, -0.16, 0.80],
     hi: [0.2, 0.16, 1.03],
 };
-/// Gripper travel per step at full action [our choice].
-pub const STEP_SIZE: f32 = 0.02;
+/// Gripper travel per step at full action \[authors: their expert moves 0.9-1.3 cm per step\].
+pub const STEP_SIZE: f32 = 0.012;
+/// The first version's travel per step (`variant = "uniform"`).
+pub const UNIFORM_STEP_SIZE: f32 = 0.02;
+/// The robot's home pose, holding the ball behind the hoop \[authors\].
+pub const HOME: [f32; 3] = [-0.315, 0.0, 1.00];
 /// How far along the action the gate probes \[authors\]; larger than the move itself.
 pub const LOOKAHEAD: f32 = 0.07;
-/// The gripper starts above this height (the reset's random moves may take it lower).
+/// The uniform variant's gripper starts above this height (its reset's random moves may take
+/// it lower).
 pub const START_MIN_Z: f32 = 1.05;
 
 /// The safety gate's test for the probe point `p = gripper + LOOKAHEAD * a`.
