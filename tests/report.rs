@@ -97,9 +97,9 @@ fn fig3_report_writes_table_svg_and_png_with_feedback_in_the_legend() {
         table.contains("## Reaching-Sim: 100k steps (paper: 100k)"),
         "{table}"
     );
-    assert!(table.contains("| 5 | 34.1k (6.3 %) |"), "{table}");
+    assert!(table.contains("| 1.17 | 34.1k (6.3 %) |"), "{table}");
     assert!(table.contains("| EF-8.4% (DREF's rate) |"), "{table}");
-    assert!(table.contains("| 5 | 10.1k |"), "{table}");
+    assert!(table.contains("| 0.23 | 10.1k |"), "{table}");
     // Every task has its six methods.
     assert_eq!(
         table.matches("\n| ").count(),

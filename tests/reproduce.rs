@@ -113,7 +113,7 @@ fn reproduce_runs_the_grid_then_ef_at_drefs_measured_rate_then_reports() {
     let table = fs::read_to_string(g.out.join("table.md")).unwrap();
     assert!(table.contains("| EF-6% (DREF's rate) |"), "{table}");
     assert!(
-        table.contains("| DREF | 41 ± 1 | 6.0 ± 1.0 % | 2 | 11.4k (1.6 %) |"),
+        table.contains("| DREF | 41 ± 1 | 6.0 ± 1.0 % | 2 | – | 1.00 | 11.4k (1.6 %) |"),
         "{table}"
     );
     let svg = fs::read_to_string(g.out.join("fig3.svg")).unwrap();
@@ -143,7 +143,8 @@ fn reproduce_resumes_by_skipping_finished_runs() {
     assert_eq!(
         new,
         [
-            "start reaching/sac/seed1 batch_size=8",
+            // Reaching's SAC row runs at the authors' reward scale.
+            "start reaching/sac/seed1 reward_scale=0.1 batch_size=8",
             "end reaching/sac/seed1"
         ]
     );

@@ -78,17 +78,30 @@ fn an_expert_trains_and_drives_dref_and_ef_runs() {
         let mut lines = csv.lines();
         assert_eq!(
             lines.next(),
-            Some("step,episode,return,cumulative_return,feedback_count,feedback_fraction")
+            Some(
+                "step,episode,return,length,outcome,cumulative_return,feedback_count,\
+                 feedback_fraction"
+            )
         );
         let mut last_cumulative = 0.0;
+        let mut last_step = 0.0;
         for line in lines {
-            let cols: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
-            assert_eq!(cols.len(), 6);
+            let cols: Vec<&str> = line.split(',').collect();
+            assert_eq!(cols.len(), 8, "{line}");
             assert!(
-                (cols[3] - (last_cumulative + cols[2])).abs() < 1e-6,
+                ["success", "failure", "time_limit"].contains(&cols[4]),
+                "outcome {line}"
+            );
+            let num = |i: usize| -> f64 { cols[i].parse().unwrap() };
+            // The length is the steps since the previous episode ended.
+            assert_eq!(num(3), num(0) - last_step, "length {line}");
+            assert_eq!(num(2) == 100.0, cols[4] == "success", "{line}");
+            assert!(
+                (num(5) - (last_cumulative + num(2))).abs() < 1e-6,
                 "cumulative column adds returns"
             );
-            last_cumulative = cols[3];
+            last_cumulative = num(5);
+            last_step = num(0);
         }
     }
 }
