@@ -331,8 +331,8 @@ fn authors_start_is_the_home_pose_with_small_noise() {
     let mut env = Placing::new();
     for seed in 0..30 {
         let obs = env.reset(seed);
-        for i in 0..3 {
-            assert!((obs[i] - placing::HOME[i]).abs() <= 0.05 * 0.012 * 50.0 + 1e-6);
+        for (o, home) in obs.iter().zip(placing::HOME) {
+            assert!((o - home).abs() <= 0.05 * 0.012 * 50.0 + 1e-6);
         }
         assert_eq!(obs[3], 1.0);
     }

@@ -83,6 +83,7 @@ async fn a_human_dref_session_runs_to_its_end_with_every_answer_stored() {
         (Some("hello"), Some("evaluative"))
     );
     assert!(!hello["predicates"].as_array().unwrap().is_empty());
+    assert_eq!(hello["pace_hz"], 15.0, "the page paces its drawing by it");
     let (acked, seen) = answer_all(&mut t, |q| {
         assert_eq!(q["kind"], "evaluative");
         assert!(!q["clip"]["frames"].as_array().unwrap().is_empty());
@@ -112,6 +113,13 @@ async fn a_human_dref_session_runs_to_its_end_with_every_answer_stored() {
     assert_eq!(
         s["answers"]["by_trainer"].as_u64(),
         Some(acked.len() as u64)
+    );
+    // The share of steps asked, kept up between episode ends (100 steps may end none).
+    let fraction = s["latest"]["feedback_fraction"].as_f64().unwrap();
+    assert!(
+        (fraction - acked.len() as f64 / 100.0).abs() < 0.02,
+        "feedback {fraction} after {} answers in 100 steps",
+        acked.len()
     );
     // Episodes end by success, failure or time limit; 100 steps may hold none of them.
     assert!(

@@ -126,7 +126,16 @@ pub(super) async fn consume(
                     }
                 }
                 SessionEvent::Progress { progress } => {
-                    live.lock().progress.progress = progress;
+                    {
+                        let mut s = live.lock();
+                        s.progress.progress = progress;
+                        // Between episode ends too: the share of steps asked so far (every
+                        // asked query is answered, by a person or by its timeout).
+                        if s.progress.unit == "steps" && progress > 0 {
+                            s.progress.feedback_fraction =
+                                s.progress.answered as f64 / progress as f64;
+                        }
+                    }
                     live.broadcast_message(&live.progress_message());
                     if stored_progress_at.elapsed() >= PROGRESS_TO_STORE_EVERY {
                         stored_progress_at = Instant::now();

@@ -27,6 +27,9 @@ pub enum ServerMessage {
         geometry: Option<Geometry>,
         /// Steps (evaluative) or queries (preference) the session will take.
         budget: u64,
+        /// Steps per second the session runs at while people watch (the page paces its
+        /// drawing by it).
+        pace_hz: f64,
     },
     Frame(Frame),
     Query(QueryMessage),

@@ -78,6 +78,10 @@ fn hello(row: &SessionRow, live: Option<&Live>, status: crate::store::Status) ->
         .as_ref()
         .and_then(|s| s.scene_graph().ok())
         .unwrap_or_else(|| SceneGraph::for_task(task));
+    let pace_hz = spec
+        .as_ref()
+        .and_then(|s| s.settings().ok())
+        .map_or(crate::session::spec::DEFAULT_PACE_HZ, |s| s.pace_hz);
     let kind = spec.map_or("evaluative", |s| s.method.query_kind());
     ServerMessage::Hello {
         session: row.id.clone(),
@@ -88,6 +92,7 @@ fn hello(row: &SessionRow, live: Option<&Live>, status: crate::store::Status) ->
         predicates: graph.predicates().to_vec(),
         geometry: live.and_then(|l| l.lock().geometry.clone()),
         budget: row.budget as u64,
+        pace_hz,
     }
 }
 

@@ -61,7 +61,9 @@ export function viewBounds(geometry, view) {
       return [Math.min(...xs) - m, tableTop - 0.06, Math.max(...xs) + m, w[5] + m];
     }
     case "lunar-lander":
-      return [0, 0, geometry.world[0], geometry.world[1]];
+      // The lander starts at the world's top edge (Gymnasium's y = H), so a unit of headroom
+      // keeps its hull (0.57 above its centre) and a first upward drift in view.
+      return [0, 0, geometry.world[0], geometry.world[1] + 1];
     default:
       throw new Error(`unknown task ${geometry.task}`);
   }
