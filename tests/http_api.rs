@@ -13,7 +13,7 @@ use axum::http::{Request, StatusCode, header};
 use dualrep::http::{app, openapi};
 use http_body_util::BodyExt;
 use serde_json::{Value, json};
-use support::server::{TOKEN, state};
+use support::server::{TOKEN, state, state_with};
 use tower::ServiceExt;
 
 struct Reply {
@@ -393,4 +393,58 @@ async fn a_synthetic_drpl_session_runs_to_its_end_and_exports() {
     )
     .await
     .assert_error(StatusCode::CONFLICT, "conflict");
+}
+
+#[tokio::test]
+async fn a_session_whose_thread_cannot_start_fails_and_can_be_resumed() {
+    // A petabyte of stack is more than any machine maps: the real spawn fails.
+    let dir = tempfile::tempdir().unwrap();
+    let st = state_with(dir.path(), |c| c.session_stack_size = Some(1 << 50)).await;
+    let router = app(st);
+    let r = call(
+        &router,
+        "POST",
+        "/api/sessions",
+        Some(TOKEN),
+        Some(r#"{"task":"reaching","method":"sac","trainer":"synthetic","steps":10}"#),
+    )
+    .await;
+    assert_eq!(r.status, StatusCode::CREATED);
+    let id = r.json()["id"].as_str().unwrap().to_string();
+    let settled = |router: axum::Router, id: String| async move {
+        let start = Instant::now();
+        loop {
+            let s = call(
+                &router,
+                "GET",
+                &format!("/api/sessions/{id}"),
+                Some(TOKEN),
+                None,
+            )
+            .await
+            .json();
+            if s["status"] != "queued" && s["status"] != "running" {
+                return s;
+            }
+            assert!(start.elapsed() < Duration::from_secs(20), "stuck: {s}");
+            tokio::time::sleep(Duration::from_millis(20)).await;
+        }
+    };
+    let s = settled(router.clone(), id.clone()).await;
+    assert_eq!(s["status"], "failed", "{s}");
+    assert!(
+        s.to_string().contains("thread could not start"),
+        "the reason is kept: {s}"
+    );
+    // Not stuck in memory: a resume is accepted, and fails the same clear way.
+    let resumed = call(
+        &router,
+        "POST",
+        &format!("/api/sessions/{id}/resume"),
+        Some(TOKEN),
+        None,
+    )
+    .await;
+    assert!(resumed.status.is_success(), "{}", resumed.status);
+    assert_eq!(settled(router, id).await["status"], "failed");
 }

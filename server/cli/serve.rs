@@ -183,6 +183,7 @@ pub async fn start(args: ServeArgs) -> anyhow::Result<Running> {
             models_dir: args.models_dir.clone(),
             max_running,
             rerun_connect: args.rerun_connect.clone(),
+            session_stack_size: None,
         },
     );
     let interrupted = hub.recover().await?;

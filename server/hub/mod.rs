@@ -38,6 +38,9 @@ pub struct HubConfig {
     pub max_running: usize,
     /// Stream every session's recording to this Rerun viewer too (`--rerun-connect`).
     pub rerun_connect: Option<String>,
+    /// Stack size of each session's thread in bytes (`None`: the platform's default). A size
+    /// the system cannot give makes the thread fail to start, and the session fails with it.
+    pub session_stack_size: Option<usize>,
 }
 
 pub struct Hub {
@@ -126,6 +129,18 @@ impl Hub {
     }
 
     /// Drop an ended session from the map (unless a resume already replaced it).
+    /// A session that could not start: `failed` with `reason`, in the database and in memory,
+    /// and no longer live, so that it can be resumed.
+    async fn fail_to_start(&self, live: &Arc<Live>, reason: &str) {
+        tracing::error!(session = %live.id, "{reason}");
+        let _ = self
+            .store
+            .set_status(&live.id, Status::Failed, Some(reason))
+            .await;
+        live.lock().status = Status::Failed;
+        self.forget(live);
+    }
+
     fn forget(&self, live: &Arc<Live>) {
         let mut map = self.live.lock().unwrap_or_else(|e| e.into_inner());
         if map.get(&live.id).is_some_and(|l| Arc::ptr_eq(l, live)) {
@@ -180,13 +195,8 @@ impl Hub {
         ) {
             (Ok(a), Ok(r), Ok(c)) => (a, r, c),
             (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => {
-                tracing::error!(session = %id, "reading the session's answers: {e}");
-                let _ = self
-                    .store
-                    .set_status(&id, Status::Failed, Some(&e.to_string()))
-                    .await;
-                live.lock().status = Status::Failed;
-                self.forget(&live);
+                let reason = format!("reading the session's answers: {e}");
+                self.fail_to_start(&live, &reason).await;
                 return;
             }
         };
@@ -197,12 +207,7 @@ impl Hub {
         let recording = match self.recording_options(&live) {
             Ok(r) => r,
             Err(reason) => {
-                let _ = self
-                    .store
-                    .set_status(&id, Status::Failed, Some(&reason))
-                    .await;
-                live.lock().status = Status::Failed;
-                self.forget(&live);
+                self.fail_to_start(&live, &reason).await;
                 return;
             }
         };
@@ -220,43 +225,43 @@ impl Hub {
         };
         let spec = live.spec.clone();
         let spec_id = id.clone();
-        let spawned = std::thread::Builder::new()
-            .name(format!("session-{id}"))
-            .spawn(move || {
-                let mut ctx = ctx;
-                // Opening the file (and a viewer connection) is blocking IO: here, not on the
-                // async runtime.
-                let (options, graph) = recording;
-                match recording::start(&spec_id, graph, &options) {
-                    Ok(observer) => ctx.observer = observer,
-                    Err(e) => {
-                        let _ = event_tx.send(crate::session::SessionEvent::Ended(
-                            crate::session::Ending::Failed(format!(
-                                "the recording could not start: {e:#}"
-                            )),
-                        ));
-                        return;
-                    }
-                }
-                let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    run_session(&spec, ctx)
-                }));
-                if let Err(panic) = result {
-                    let what = panic
-                        .downcast_ref::<String>()
-                        .cloned()
-                        .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-                        .unwrap_or_else(|| "unknown".into());
+        let mut builder = std::thread::Builder::new().name(format!("session-{id}"));
+        if let Some(bytes) = self.config.session_stack_size {
+            builder = builder.stack_size(bytes);
+        }
+        let spawned = builder.spawn(move || {
+            let mut ctx = ctx;
+            // Opening the file (and a viewer connection) is blocking IO: here, not on the
+            // async runtime.
+            let (options, graph) = recording;
+            match recording::start(&spec_id, graph, &options) {
+                Ok(observer) => ctx.observer = observer,
+                Err(e) => {
                     let _ = event_tx.send(crate::session::SessionEvent::Ended(
-                        crate::session::Ending::Failed(format!("the session panicked: {what}")),
+                        crate::session::Ending::Failed(format!(
+                            "the recording could not start: {e:#}"
+                        )),
                     ));
+                    return;
                 }
-            });
+            }
+            let result =
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run_session(&spec, ctx)));
+            if let Err(panic) = result {
+                let what = panic
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_else(|| "unknown".into());
+                let _ = event_tx.send(crate::session::SessionEvent::Ended(
+                    crate::session::Ending::Failed(format!("the session panicked: {what}")),
+                ));
+            }
+        });
         if let Err(e) = spawned {
-            let _ = self
-                .store
-                .set_status(&id, Status::Failed, Some(&format!("no thread: {e}")))
-                .await;
+            live.lock().control = None;
+            let reason = format!("the session's thread could not start: {e}");
+            self.fail_to_start(&live, &reason).await;
             return;
         }
         consumer::consume(self.clone(), live, event_rx).await;

@@ -20,16 +20,21 @@ pub fn root() -> std::path::PathBuf {
 }
 
 pub async fn state(dir: &std::path::Path) -> AppState {
+    state_with(dir, |_| {}).await
+}
+
+/// As [`state`], with the hub's configuration changed by `tweak`.
+pub async fn state_with(dir: &std::path::Path, tweak: impl FnOnce(&mut HubConfig)) -> AppState {
     let store = Store::open(dir).await.unwrap();
-    let hub = Hub::new(
-        store.clone(),
-        HubConfig {
-            data_dir: dir.to_path_buf(),
-            models_dir: root().join("models"),
-            max_running: 4,
-            rerun_connect: None,
-        },
-    );
+    let mut config = HubConfig {
+        data_dir: dir.to_path_buf(),
+        models_dir: root().join("models"),
+        max_running: 4,
+        rerun_connect: None,
+        session_stack_size: None,
+    };
+    tweak(&mut config);
+    let hub = Hub::new(store.clone(), config);
     AppState {
         store,
         hub,
