@@ -62,10 +62,11 @@ true sum. Our simulators are not the paper's, so compare the ratios to EF-100%: 
 true sums) beside the paper's.
 ";
 
-/// `value / reference` to two decimals, or "–" when either is missing or the reference is 0.
+/// `value / reference` to two decimals, or "–" when either is missing or the reference is not
+/// positive (a ratio to a negative sum, as Lunar Lander's at 20k steps, reads backwards).
 fn fmt_ratio(value: Option<f64>, reference: Option<f64>) -> String {
     match (value, reference) {
-        (Some(v), Some(r)) if r != 0.0 && v.is_finite() && r.is_finite() => {
+        (Some(v), Some(r)) if r > 0.0 && v.is_finite() && r.is_finite() => {
             format!("{:.2}", v / r)
         }
         _ => "–".into(),
