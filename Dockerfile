@@ -12,7 +12,8 @@ RUN --mount=type=cache,target=/usr/local/cargo/registry \
     cargo build --release --locked --bin dualrep \
     && cp target/release/dualrep /usr/local/bin/dualrep
 
-# Runtime stage: the binary, the web UI and the shipped experts, run as an unprivileged user.
+# Runtime stage: the binary (it carries the web UI and the shipped experts), run as an
+# unprivileged user.
 FROM debian:bookworm-slim
 # ca-certificates for outgoing TLS (a remote Rerun viewer); curl for the compose health check.
 RUN apt-get update \
@@ -22,11 +23,7 @@ RUN useradd --system --create-home --home-dir /home/dualrep --shell /usr/sbin/no
     && mkdir -p /data \
     && chown dualrep:dualrep /data
 COPY --from=build /usr/local/bin/dualrep /usr/local/bin/dualrep
-WORKDIR /app
-# The server serves web/ and the synthetic trainer loads models/<task>.safetensors, both
-# relative to the working directory.
-COPY web/ /app/web/
-COPY models/ /app/models/
+WORKDIR /home/dualrep
 USER dualrep
 # SQLite database, checkpoints and recordings (<data-dir>/recordings/<session-id>.rrd).
 VOLUME ["/data"]

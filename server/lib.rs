@@ -33,6 +33,7 @@
 //!   and graceful shutdown.
 //! - [`http`]: REST routes, auth, errors, the web UI's files; [`ws`]: the trainer websocket and
 //!   its typed protocol.
+//! - [`shipped`]: the web UI and the shipped experts, carried inside the binary.
 //! - [`record`]: the Rerun recording of a session (scene per step, rewards, predicates,
 //!   queries and answers on `step` and `episode` timelines) to an `.rrd` file and/or a live
 //!   viewer, from a logging thread behind a bounded channel.
@@ -50,6 +51,7 @@ pub mod report;
 pub mod rl;
 pub mod scene_graph;
 pub mod session;
+pub mod shipped;
 pub mod sim;
 pub mod store;
 pub mod ws;

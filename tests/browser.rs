@@ -3,8 +3,8 @@
 //! on a free port with a fresh data dir and runs one script; screenshots land in
 //! `$DUALREP_ARTIFACTS` (default `<target dir>/browser-artifacts`).
 //!
-//! Needs `chromium`, `node` and `npm` (`apt-get install -y chromium nodejs npm`; `.ci/run`
-//! installs them). `DUALREP_SKIP_BROWSER=1` skips these tests, loudly; without it a missing
+//! Needs `chromium`, `node` and `npm` (`.ci/run` installs whichever is missing; Debian's `npm`
+//! only where Node.js itself comes from Debian). `DUALREP_SKIP_BROWSER=1` skips these tests, loudly; without it a missing
 //! browser is a failure.
 
 use std::path::{Path, PathBuf};
@@ -45,14 +45,40 @@ fn chromium() -> Option<PathBuf> {
             );
             None
         }
-        (c, n, p) => panic!(
-            "the browser tests need Debian's chromium, node and npm (found: chromium {}, node {}, npm {}).\n\
-             Install them with `sudo apt-get install -y chromium nodejs npm` (.ci/run does this),\n\
-             or set DUALREP_SKIP_BROWSER=1 to skip these tests.",
-            c.is_some(),
-            n.is_some(),
-            p.is_some()
-        ),
+        (c, n, p) => {
+            // Only what is missing: a Node.js from another source ships its own npm, and
+            // Debian's `npm` package conflicts with it.
+            let mut missing = Vec::new();
+            if c.is_none() {
+                missing.push("chromium");
+            }
+            if n.is_none() {
+                missing.push("nodejs");
+            }
+            if p.is_none() && n.is_none() {
+                missing.push("npm");
+            }
+            let install = if missing.is_empty() {
+                format!(
+                    "npm is missing beside the Node.js at {}: install the npm that goes with it",
+                    n.as_ref()
+                        .map_or_else(String::new, |n| n.display().to_string())
+                )
+            } else {
+                format!(
+                    "install them with `sudo apt-get install -y {}`",
+                    missing.join(" ")
+                )
+            };
+            panic!(
+                "the browser tests need Debian's chromium, node and npm (found: chromium {}, \
+                 node {}, npm {}).\n{install} (`bash .ci/run` installs what is missing, then runs \
+                 every test), or set DUALREP_SKIP_BROWSER=1 to skip these tests.",
+                c.is_some(),
+                n.is_some(),
+                p.is_some(),
+            )
+        }
     }
 }
 

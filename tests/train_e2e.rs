@@ -253,9 +253,18 @@ fn bad_input_is_refused_with_a_clear_message() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains(needle), "{args:?}: {err}");
     };
+    // Without `--expert` the binary's own expert is used; a named one must exist.
     refused(
         &[
-            "train", "--task", "reaching", "--method", "dref", "--out", "x",
+            "train",
+            "--task",
+            "reaching",
+            "--method",
+            "dref",
+            "--expert",
+            "missing.safetensors",
+            "--out",
+            "x",
         ],
         "dualrep expert --task reaching",
     );

@@ -29,12 +29,13 @@ pub struct ServeArgs {
     /// Sessions that run at once; the rest queue [default: the number of cores].
     #[arg(long)]
     pub max_sessions: Option<usize>,
-    /// The web UI's files.
-    #[arg(long, default_value = "web")]
-    pub web_dir: PathBuf,
-    /// The synthetic trainers' experts (`<task>.safetensors`).
-    #[arg(long, default_value = "models")]
-    pub models_dir: PathBuf,
+    /// Serve the web UI from this folder instead of the copy inside the binary (development).
+    #[arg(long)]
+    pub web_dir: Option<PathBuf>,
+    /// Load the synthetic trainers' experts (`<task>.safetensors`) from this folder instead of
+    /// the ones inside the binary.
+    #[arg(long)]
+    pub models_dir: Option<PathBuf>,
     /// Origins allowed to call the API cross-site (repeatable); none by default.
     #[arg(long = "cors-origin")]
     pub cors_origins: Vec<String>,
@@ -164,10 +165,14 @@ pub async fn start(args: ServeArgs) -> anyhow::Result<Running> {
                 .with_context(|| format!("--cors-origin {o:?} is not a valid origin"))
         })
         .collect::<anyhow::Result<Vec<_>>>()?;
-    if !args.web_dir.join("index.html").exists() {
-        tracing::warn!(
-            "{} has no index.html: the web UI will not load (run from the repository root or pass --web-dir)",
-            args.web_dir.display()
+    if let Some(web) = args
+        .web_dir
+        .as_ref()
+        .filter(|w| !w.join("index.html").exists())
+    {
+        anyhow::bail!(
+            "--web-dir {} has no index.html (leave --web-dir out to serve the UI inside the binary)",
+            web.display()
         );
     }
     let store = Store::open(&args.data_dir)

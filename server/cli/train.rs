@@ -44,7 +44,8 @@ pub struct TrainArgs {
     pub out: PathBuf,
     #[command(flatten)]
     pub overrides: overrides::OverrideArgs,
-    /// The expert the synthetic trainer consults [default: models/<task>.safetensors].
+    /// The expert the synthetic trainer consults [default: models/<task>.safetensors if there
+    /// is one in the current directory, else the one inside the binary].
     #[arg(long)]
     pub expert: Option<PathBuf>,
     /// The oracle's rule: authors (alpha Q*) or sign-aware.
@@ -266,11 +267,14 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
     let mut trainer: Box<dyn EvaluativeTrainer> = match args.method {
         EvaluativeMethod::Sac => Box::new(NoTrainer),
         _ => {
-            let path = args
-                .expert
-                .clone()
-                .unwrap_or_else(|| PathBuf::from(format!("models/{}.safetensors", args.task)));
-            let expert = load_expert(&path, args.task)?;
+            let local = PathBuf::from(format!("models/{}.safetensors", args.task));
+            let expert = match &args.expert {
+                Some(path) => load_expert(path, args.task)?,
+                None if local.is_file() => load_expert(&local, args.task)?,
+                None => {
+                    crate::session::load_task_expert(None, args.task).map_err(anyhow::Error::msg)?
+                }
+            };
             let act_dim = config.make_env().spec().action_space.dim();
             Box::new(ExpertOracle::new(expert, act_dim, args.oracle))
         }

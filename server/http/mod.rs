@@ -39,7 +39,8 @@ pub struct AppState {
     pub hub: Arc<Hub>,
     /// The researcher token.
     pub token: Arc<str>,
-    pub web_dir: PathBuf,
+    /// Serve the web UI from this folder; `None` serves the copy inside the binary.
+    pub web_dir: Option<PathBuf>,
     pub data_dir: PathBuf,
     /// Origins allowed to call the API from other sites (none by default).
     pub cors_origins: Vec<HeaderValue>,
@@ -64,7 +65,6 @@ pub fn app(state: AppState) -> Router {
             state.clone(),
             auth::require_researcher,
         ));
-    let web = state.web_dir.clone();
     let mut router = Router::new()
         .merge(researcher)
         .route("/api/sessions/{id}/survey", post(sessions::survey))
@@ -72,10 +72,18 @@ pub fn app(state: AppState) -> Router {
         .route("/api/openapi.json", get(openapi::openapi))
         .route("/api/{*rest}", any(api_not_found))
         .route("/healthz", get(healthz))
-        .route("/ws/sessions/{id}", get(crate::ws::socket::upgrade))
-        .route_service("/train/{id}", ServeFile::new(web.join("train.html")))
-        .route_service("/review/{id}", ServeFile::new(web.join("review.html")))
-        .fallback_service(ServeDir::new(&web))
+        .route("/ws/sessions/{id}", get(crate::ws::socket::upgrade));
+    router = match &state.web_dir {
+        Some(web) => router
+            .route_service("/train/{id}", ServeFile::new(web.join("train.html")))
+            .route_service("/review/{id}", ServeFile::new(web.join("review.html")))
+            .fallback_service(ServeDir::new(web)),
+        None => router
+            .route("/train/{id}", get(|| shipped_page("train.html")))
+            .route("/review/{id}", get(|| shipped_page("review.html")))
+            .fallback(shipped_file),
+    };
+    let mut router = router
         .layer(RequestBodyLimitLayer::new(MAX_BODY_BYTES))
         .layer(TraceLayer::new_for_http());
     if !state.cors_origins.is_empty() {
@@ -87,6 +95,24 @@ pub fn app(state: AppState) -> Router {
         );
     }
     router.with_state(state)
+}
+
+/// A page of the web UI inside the binary.
+async fn shipped_page(name: &'static str) -> Response {
+    serve_shipped(name)
+}
+
+/// Any other path: a file of the web UI inside the binary (`/` is `index.html`).
+async fn shipped_file(uri: axum::http::Uri) -> Response {
+    let path = uri.path().trim_start_matches('/');
+    serve_shipped(if path.is_empty() { "index.html" } else { path })
+}
+
+fn serve_shipped(path: &str) -> Response {
+    match crate::shipped::web_file(path) {
+        Some((bytes, mime)) => ([(header::CONTENT_TYPE, mime)], bytes).into_response(),
+        None => (StatusCode::NOT_FOUND, "not found").into_response(),
+    }
 }
 
 async fn api_not_found() -> ApiError {

@@ -32,8 +32,9 @@ use crate::store::{NewSession, SessionRow, Status, Store};
 #[derive(Clone, Debug)]
 pub struct HubConfig {
     pub data_dir: PathBuf,
-    /// Where the synthetic trainers' experts are (`<task>.safetensors`).
-    pub models_dir: PathBuf,
+    /// Where the synthetic trainers' experts are (`<task>.safetensors`); `None`: the ones the
+    /// binary ships.
+    pub models_dir: Option<PathBuf>,
     /// Sessions running at once; the rest wait as `queued`.
     pub max_running: usize,
     /// Stream every session's recording to this Rerun viewer too (`--rerun-connect`).

@@ -29,7 +29,11 @@ fn report_numbers_are_formatted_like_the_paper() {
     assert_eq!(fmt_steps(150_000), "150k");
     assert_eq!(fmt_steps(1_500), "1500");
     assert_eq!(fmt_ratio(Some(-2.0), Some(4.0)), "-0.50");
-    assert_eq!(fmt_ratio(Some(-2.0), Some(-4.0)), "–", "no ratio to a negative sum");
+    assert_eq!(
+        fmt_ratio(Some(-2.0), Some(-4.0)),
+        "–",
+        "no ratio to a negative sum"
+    );
     assert_eq!(fmt_ratio(None, Some(4.0)), "–");
 }
 

@@ -32,6 +32,19 @@ pub fn load_expert(path: &Path, task: Task) -> Result<Sac, String> {
     Sac::from_safetensors(&bytes).map_err(|e| format!("loading the expert {}: {e}", path.display()))
 }
 
+/// The expert of `task`: `<dir>/<task>.safetensors` when a folder is given, else the one the
+/// binary ships.
+pub fn load_task_expert(dir: Option<&Path>, task: Task) -> Result<Sac, String> {
+    match dir {
+        Some(dir) => load_expert(&dir.join(format!("{task}.safetensors")), task),
+        None => {
+            let bytes = crate::shipped::expert(task)
+                .ok_or_else(|| format!("this binary ships no expert for {task}"))?;
+            Sac::from_safetensors(&bytes).map_err(|e| format!("loading the shipped expert: {e}"))
+        }
+    }
+}
+
 /// Asks the session's queries: replays stored answers first, then asks people through the
 /// control channel (human sessions) or reports a synthetic trainer's answers (so they are stored).
 pub(super) struct Asker {

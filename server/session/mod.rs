@@ -14,7 +14,7 @@ pub mod query;
 pub mod runner;
 pub mod spec;
 
-pub use asker::load_expert;
+pub use asker::{load_expert, load_task_expert};
 pub use events::{
     AnswerValue, Checkpoint, Control, Controls, Ending, Frame, Observer, Revision, SessionEvent,
     SessionSink, StoredRevision,

@@ -17,7 +17,7 @@ use crate::guidance::evaluative_trainer::{Evaluation, NoTrainer};
 use crate::guidance::expert_oracle::{ExpertOracle, OracleRule};
 use crate::guidance::feedback_schedule::EvaluativeMethod;
 
-use super::asker::{Asker, Comparer, EvaluativeAsker, Judge, PreferenceAsker, load_expert};
+use super::asker::{Asker, Comparer, EvaluativeAsker, Judge, PreferenceAsker, load_task_expert};
 use super::events::{
     AnswerValue, Checkpoint, Controls, Ending, Frame, Halt, Observer, Revision, SessionEvent,
     SessionSink, StoredRevision,
@@ -39,7 +39,7 @@ pub struct SessionContext {
     /// The latest checkpoint `(progress, digest)`: a resumed session checks its replay against it.
     pub verify: Option<(u64, String)>,
     /// Where the synthetic trainer's experts live (`<dir>/<task>.safetensors`).
-    pub models_dir: PathBuf,
+    pub models_dir: Option<PathBuf>,
     /// Sees every step, query and answer (the recording), if any.
     pub observer: Option<Box<dyn Observer>>,
 }
@@ -154,10 +154,7 @@ fn run_evaluative(
             oracle: match run.config().method {
                 EvaluativeMethod::Sac => Box::new(NoTrainer),
                 _ => {
-                    let expert = load_expert(
-                        &ctx.models_dir.join(format!("{}.safetensors", spec.task)),
-                        spec.task,
-                    )?;
+                    let expert = load_task_expert(ctx.models_dir.as_deref(), spec.task)?;
                     let act_dim = run.env().spec().action_space.dim();
                     Box::new(ExpertOracle::new(expert, act_dim, OracleRule::Authors))
                 }

@@ -15,7 +15,8 @@ pub fn start_serve(data: &Path, token: &str, extra: &[&str], stderr: Stdio) -> (
         .args(extra)
         .arg("--data-dir")
         .arg(data)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        // Not the repository: the binary serves the UI and experts it carries, from anywhere.
+        .current_dir(data)
         .stdout(Stdio::piped())
         .stderr(stderr)
         .spawn()

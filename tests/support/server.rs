@@ -28,7 +28,7 @@ pub async fn state_with(dir: &std::path::Path, tweak: impl FnOnce(&mut HubConfig
     let store = Store::open(dir).await.unwrap();
     let mut config = HubConfig {
         data_dir: dir.to_path_buf(),
-        models_dir: root().join("models"),
+        models_dir: Some(root().join("models")),
         max_running: 4,
         rerun_connect: None,
         session_stack_size: None,
@@ -39,7 +39,7 @@ pub async fn state_with(dir: &std::path::Path, tweak: impl FnOnce(&mut HubConfig
         store,
         hub,
         token: Arc::from(TOKEN),
-        web_dir: root().join("web"),
+        web_dir: Some(root().join("web")),
         data_dir: dir.to_path_buf(),
         cors_origins: vec![],
     }
@@ -51,8 +51,8 @@ pub async fn serve(dir: &std::path::Path) -> Running {
         data_dir: dir.to_path_buf(),
         token: Some(TOKEN.into()),
         max_sessions: Some(4),
-        web_dir: root().join("web"),
-        models_dir: root().join("models"),
+        web_dir: Some(root().join("web")),
+        models_dir: Some(root().join("models")),
         cors_origins: vec![],
         shutdown_grace_s: 30.0,
         rerun_connect: None,
