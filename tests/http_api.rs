@@ -42,6 +42,27 @@ impl Reply {
     }
 }
 
+/// The session once it is neither queued nor running (a minute at most).
+async fn settled(router: &axum::Router, id: &str) -> Value {
+    let start = Instant::now();
+    loop {
+        let s = call(
+            router,
+            "GET",
+            &format!("/api/sessions/{id}"),
+            Some(TOKEN),
+            None,
+        )
+        .await
+        .json();
+        if s["status"] != "queued" && s["status"] != "running" {
+            return s;
+        }
+        assert!(start.elapsed() < Duration::from_secs(60), "{s}");
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+}
+
 async fn call(
     router: &axum::Router,
     method: &str,
@@ -236,23 +257,7 @@ async fn a_synthetic_drpl_session_runs_to_its_end_and_exports() {
             .unwrap()
             .starts_with(&format!("/train/{id}?token="))
     );
-    let start = Instant::now();
-    let session = loop {
-        let s = call(
-            &router,
-            "GET",
-            &format!("/api/sessions/{id}"),
-            Some(TOKEN),
-            None,
-        )
-        .await
-        .json();
-        if s["status"] == "finished" || s["status"] == "failed" {
-            break s;
-        }
-        assert!(start.elapsed() < Duration::from_secs(60), "{s}");
-        tokio::time::sleep(Duration::from_millis(50)).await;
-    };
+    let session = settled(&router, &id).await;
     assert_eq!(session["status"], "finished", "{session}");
     assert_eq!(session["progress"], 6);
     assert_eq!(session["unit"], "queries");
@@ -411,26 +416,7 @@ async fn a_session_whose_thread_cannot_start_fails_and_can_be_resumed() {
     .await;
     assert_eq!(r.status, StatusCode::CREATED);
     let id = r.json()["id"].as_str().unwrap().to_string();
-    let settled = |router: axum::Router, id: String| async move {
-        let start = Instant::now();
-        loop {
-            let s = call(
-                &router,
-                "GET",
-                &format!("/api/sessions/{id}"),
-                Some(TOKEN),
-                None,
-            )
-            .await
-            .json();
-            if s["status"] != "queued" && s["status"] != "running" {
-                return s;
-            }
-            assert!(start.elapsed() < Duration::from_secs(20), "stuck: {s}");
-            tokio::time::sleep(Duration::from_millis(20)).await;
-        }
-    };
-    let s = settled(router.clone(), id.clone()).await;
+    let s = settled(&router, &id).await;
     assert_eq!(s["status"], "failed", "{s}");
     assert!(
         s.to_string().contains("thread could not start"),
@@ -446,5 +432,5 @@ async fn a_session_whose_thread_cannot_start_fails_and_can_be_resumed() {
     )
     .await;
     assert!(resumed.status.is_success(), "{}", resumed.status);
-    assert_eq!(settled(router, id).await["status"], "failed");
+    assert_eq!(settled(&router, &id).await["status"], "failed");
 }
