@@ -21,7 +21,7 @@ pub fn describe() -> Value {
         .map(|task| {
             let env = task.make_env();
             let spec = env.spec();
-            json!({
+            let mut described = json!({
                 "id": task.id(),
                 "observation_dim": spec.observation_space.dim(),
                 "action_dim": spec.action_space.dim(),
@@ -32,7 +32,17 @@ pub fn describe() -> Value {
                     "dref": EvaluativeRunConfig::new(task, EvaluativeMethod::Dref, 0),
                     "drpl": PreferenceRunConfig::new(task, QueryMethod::Drpl, 0),
                 },
-            })
+            });
+            // The task versions (`variant`, ...) are Reaching's and Placing's only: a launch
+            // form must not offer them for Lunar Lander, whose settings would refuse them.
+            if task == Task::LunarLander {
+                for family in ["dref", "drpl"] {
+                    if let Some(config) = described["defaults"][family].as_object_mut() {
+                        config.remove("env");
+                    }
+                }
+            }
+            described
         })
         .collect();
     json!({
@@ -53,4 +63,19 @@ pub fn describe() -> Value {
 
 pub async fn tasks() -> Json<Value> {
     Json(describe())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn task_versions_are_offered_for_the_table_top_tasks_only() {
+        let d = describe();
+        for t in d["tasks"].as_array().unwrap() {
+            let offered = t["defaults"]["dref"]["env"]["variant"] == "authors";
+            assert_eq!(offered, t["id"] != "lunar-lander", "{}", t["id"]);
+            assert_eq!(t["defaults"]["drpl"]["env"].is_object(), offered);
+        }
+    }
 }
