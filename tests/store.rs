@@ -140,6 +140,7 @@ async fn status_episodes_checkpoints_and_recovery(pool: SqlitePool) {
         feedback_count: 4,
         feedback_fraction: 0.1,
         outcome: Outcome::Success,
+        states_with_feedback: 3,
     };
     store.insert_episode("s1", &e).await.unwrap();
     store.insert_episode("s1", &e).await.unwrap();

@@ -80,19 +80,22 @@ fn an_expert_trains_and_drives_dref_and_ef_runs() {
             lines.next(),
             Some(
                 "step,episode,return,length,outcome,cumulative_return,feedback_count,\
-                 feedback_fraction"
+                 feedback_fraction,states_with_feedback"
             )
         );
         let mut last_cumulative = 0.0;
         let mut last_step = 0.0;
         for line in lines {
             let cols: Vec<&str> = line.split(',').collect();
-            assert_eq!(cols.len(), 8, "{line}");
+            assert_eq!(cols.len(), 9, "{line}");
             assert!(
                 ["success", "failure", "time_limit"].contains(&cols[4]),
                 "outcome {line}"
             );
             let num = |i: usize| -> f64 { cols[i].parse().unwrap() };
+            // Only DREF ranks abstract states; it has had feedback in at least one by its
+            // first episode's end (it asks at its first step).
+            assert_eq!(num(8) > 0.0, method == "dref", "{method}: {line}");
             // The length is the steps since the previous episode ended.
             assert_eq!(num(3), num(0) - last_step, "length {line}");
             assert_eq!(num(2) == 100.0, cols[4] == "success", "{line}");

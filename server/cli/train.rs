@@ -208,7 +208,8 @@ pub fn drive(
     if !append {
         writeln!(
             csv,
-            "step,episode,return,length,outcome,cumulative_return,feedback_count,feedback_fraction"
+            "step,episode,return,length,outcome,cumulative_return,feedback_count,feedback_fraction,\
+             states_with_feedback"
         )?;
     }
     let mut episodes = Vec::new();
@@ -218,7 +219,7 @@ pub fn drive(
         if let Some(e) = report.episode {
             writeln!(
                 csv,
-                "{},{},{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{},{},{}",
                 e.step,
                 e.episode,
                 e.episode_return,
@@ -226,7 +227,8 @@ pub fn drive(
                 e.outcome.id(),
                 e.cumulative_return,
                 e.feedback_count,
-                e.feedback_fraction
+                e.feedback_fraction,
+                e.states_with_feedback
             )?;
             csv.flush()?;
             if let Some(c) = checkpoints.as_deref_mut() {

@@ -146,6 +146,10 @@ pub struct EpisodeRecord {
     /// `feedback_count / step`.
     pub feedback_fraction: f64,
     pub outcome: Outcome,
+    /// DREF: abstract states that have had feedback so far (while at most k + 1 have, its rule
+    /// asks at every step); 0 for the other methods.
+    #[serde(default)]
+    pub states_with_feedback: u64,
 }
 
 /// What one call of [`EvaluativeRun::step`] did.
@@ -362,6 +366,7 @@ impl EvaluativeRun {
             feedback_count: self.feedback_count,
             feedback_fraction: self.feedback_count as f64 / self.steps as f64,
             outcome,
+            states_with_feedback: self.schedule.states_with_feedback() as u64,
         };
         self.episodes += 1;
         self.episode_return = 0.0;

@@ -105,6 +105,15 @@ impl FeedbackSchedule {
     }
 
     /// Tell the schedule the answer `h` given in `g` (the human critic predicted `h_hat`).
+    /// DREF: how many abstract states have had feedback (the states its rule ranks); 0 for the
+    /// other methods, which keep no per-state statistics.
+    pub fn states_with_feedback(&self) -> usize {
+        match self {
+            FeedbackSchedule::Dref(rule) => rule.seen().count(),
+            _ => 0,
+        }
+    }
+
     pub fn record(&mut self, g: AbstractState, h: f32, h_hat: f32) {
         if let FeedbackSchedule::Dref(rule) = self {
             rule.record(g, h, h_hat);

@@ -232,4 +232,29 @@ mod tests {
         let back: QueryRule = serde_json::from_str(&serde_json::to_string(&rule).unwrap()).unwrap();
         assert_eq!(back, rule);
     }
+
+    #[test]
+    fn with_at_most_k_plus_one_states_seen_every_state_is_asked() {
+        // Only other seen states can outrank g, so with k + 1 of them or fewer seen the rank
+        // test always passes: DREF asks at every step until a (k + 2)-th state has feedback.
+        let (a, b, c, d) = (
+            AbstractState(1),
+            AbstractState(2),
+            AbstractState(3),
+            AbstractState(4),
+        );
+        let mut rule = QueryRule::new(0.1, 2, UcbForm::Authors);
+        for _ in 0..500 {
+            rule.record(a, 1.0, 1.0);
+        }
+        rule.record(b, 1.0, -1.0);
+        rule.record(c, 1.0, -1.0);
+        // `a` has by far the lowest score of the three, and is still asked.
+        assert!(rule.score(a) < rule.score(b) && rule.score(a) < rule.score(c));
+        assert!(rule.should_query(a));
+        // A fourth state with feedback puts three above `a`: it is no longer asked.
+        rule.record(d, 1.0, -1.0);
+        assert!(!rule.should_query(a));
+        assert!(rule.should_query(d));
+    }
 }
