@@ -28,9 +28,10 @@
 //!
 //! - [`store`]: SQLite through sqlx (schema in `migrations/`): sessions, queries, answers,
 //!   episodes, checkpoints.
-//! - [`hub`]: the sessions a server runs: a cap on how many at once, one thread each, an async
-//!   consumer of each session's events, the answer path (commit, then acknowledge), stop, resume
-//!   and graceful shutdown.
+//! - [`hub`]: the sessions a server runs: a cap on how many at once, one thread each, and one
+//!   owner task each that alone holds the session's live state (events, answers, undo,
+//!   deadlines and status in one `select!`; commit, then acknowledge); stop, resume and
+//!   graceful shutdown.
 //! - [`http`]: REST routes, auth, errors, the web UI's files; [`ws`]: the trainer websocket and
 //!   its typed protocol.
 //! - [`shipped`]: the web UI and the shipped experts, carried inside the binary.
@@ -46,10 +47,12 @@ pub mod cli;
 pub mod guidance;
 pub mod http;
 pub mod hub;
+pub mod protocol;
 pub mod record;
 pub mod report;
 pub mod rl;
 pub mod scene_graph;
+pub mod server;
 pub mod session;
 pub mod shipped;
 pub mod sim;

@@ -1,14 +1,10 @@
 //! A DRPL belief update allocates nothing: its 2199 Metropolis-Hastings proposals reuse buffers
-//! made when the belief and its answers were created (counting allocator, own test binary).
+//! made when the belief and its answers were created (the suite's counting allocator, whose counters are per thread).
 
-#[path = "support/counting_alloc.rs"]
-mod counting_alloc;
+use crate::support::counting_alloc;
 
-use counting_alloc::{Counting, count};
+use counting_alloc::count;
 use dualrep::guidance::drpl::belief::{Belief, BeliefConfig, Response};
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 #[test]
 fn a_belief_update_allocates_nothing() {

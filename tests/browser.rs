@@ -7,9 +7,8 @@
 //! only where Node.js itself comes from Debian). `DUALREP_SKIP_BROWSER=1` skips these tests, loudly; without it a missing
 //! browser is a failure.
 
+use crate::support::binary;
 use std::path::{Path, PathBuf};
-#[path = "support/binary.rs"]
-mod binary;
 
 use std::process::{Child, Command, Stdio};
 use std::sync::Mutex;

@@ -2,22 +2,16 @@
 //! answers; after a restart every acknowledged answer is in the database file and in the API,
 //! the session is `interrupted`, and once resumed it never re-asks an answered query and finishes.
 
-mod support {
-    pub mod binary;
-    pub mod server;
-    pub mod trainer;
-}
-
 use std::collections::HashMap;
 use std::path::Path;
 use std::process::{Child, Stdio};
 use std::time::Duration;
 
+use crate::support::binary::start_serve;
+use crate::support::server::{Api, TOKEN};
+use crate::support::trainer::{Trainer, token_of};
 use serde_json::{Value, json};
 use sqlx::Row;
-use support::binary::start_serve;
-use support::server::{Api, TOKEN};
-use support::trainer::{Trainer, token_of};
 
 const WAIT: Duration = Duration::from_secs(60);
 

@@ -1,19 +1,14 @@
 //! The REST handlers through `app().oneshot(...)`: auth, launch validation, the error shape, the
 //! self-description, and a synthetic preference session from launch to export.
 
-mod support {
-    pub mod server;
-    pub mod trainer;
-}
-
 use std::time::{Duration, Instant};
 
+use crate::support::server::{TOKEN, state, state_with};
 use axum::body::Body;
 use axum::http::{Request, StatusCode, header};
 use dualrep::http::{app, openapi};
 use http_body_util::BodyExt;
 use serde_json::{Value, json};
-use support::server::{TOKEN, state, state_with};
 use tower::ServiceExt;
 
 struct Reply {
@@ -433,4 +428,45 @@ async fn a_session_whose_thread_cannot_start_fails_and_can_be_resumed() {
     .await;
     assert!(resumed.status.is_success(), "{}", resumed.status);
     assert_eq!(settled(&router, &id).await["status"], "failed");
+}
+
+#[tokio::test]
+async fn a_session_launched_with_record_false_runs_and_writes_no_recording() {
+    let dir = tempfile::tempdir().unwrap();
+    let router = app(state(dir.path()).await);
+    let r = call(
+        &router,
+        "POST",
+        "/api/sessions",
+        Some(TOKEN),
+        Some(
+            r#"{"task":"reaching","method":"sac","trainer":"synthetic","steps":50,"params":{"record":false}}"#,
+        ),
+    )
+    .await;
+    assert_eq!(
+        r.status,
+        StatusCode::CREATED,
+        "{}",
+        String::from_utf8_lossy(&r.body)
+    );
+    let id = r.json()["id"].as_str().unwrap().to_string();
+    let s = settled(&router, &id).await;
+    assert_eq!(s["status"], "finished", "{s}");
+    assert_eq!(s["params"]["record"], false, "{s}");
+    assert!(
+        !dir.path()
+            .join("recordings")
+            .join(format!("{id}.rrd"))
+            .exists()
+    );
+    call(
+        &router,
+        "GET",
+        &format!("/api/sessions/{id}/recording.rrd"),
+        Some(TOKEN),
+        None,
+    )
+    .await
+    .assert_error(StatusCode::NOT_FOUND, "not_found");
 }

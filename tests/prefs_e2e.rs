@@ -11,8 +11,7 @@ use dualrep::report::run_files::{RunKey, load_prefs_runs, read_prefs_run};
 use dualrep::scene_graph::SceneGraph;
 use dualrep::sim::Task;
 
-#[path = "support/cli.rs"]
-mod cli;
+use crate::support::cli;
 
 use cli::ok;
 

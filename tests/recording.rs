@@ -4,8 +4,7 @@
 //! for every per-step entity, the predicates against the scene graph, and every query and
 //! answer.
 
-#[path = "support/rerun_py.rs"]
-mod rerun_py;
+use crate::support::rerun_py;
 
 use std::collections::BTreeSet;
 use std::path::Path;

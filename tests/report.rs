@@ -4,7 +4,7 @@
 //!
 //! Set `REPORT_FIXTURE_OUT=DIR` to keep the fixture grids and their figures in DIR for a look.
 
-mod report_fixtures;
+use crate::report_fixtures;
 
 use std::fs;
 use std::path::{Path, PathBuf};

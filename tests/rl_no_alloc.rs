@@ -1,21 +1,17 @@
 //! The training loop allocates nothing of its own once the workspaces exist.
 //!
-//! A counting global allocator (its own test binary, so no other test shares it) counts, per
-//! thread, the allocations made during SAC-like update steps. Every matrix product goes to
-//! matrixmultiply's `sgemm`, which allocates (and frees) its packing buffer inside every call;
+//! The suite's counting global allocator (tests/main.rs) counts the allocations made during
+//! SAC-like update steps, per thread, so the tests running beside these do not disturb the
+//! count. Every matrix product goes to matrixmultiply's `sgemm`, which allocates (and frees) its packing buffer inside every call;
 //! that is the only allocation allowed: exactly one per product, and nothing still live after.
 
 use dualrep::rl::{Adam, AdamConfig, Mlp, MlpWorkspace, mse_loss};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-#[path = "support/counting_alloc.rs"]
-mod counting_alloc;
+use crate::support::counting_alloc;
 
-use counting_alloc::{Counting, count};
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+use counting_alloc::count;
 
 /// A critic, its Polyak target, an actor and their optimisers, as in a SAC update.
 struct Sac {

@@ -1,18 +1,14 @@
-//! `Sac::update` allocates nothing of its own: with a counting global allocator (its own test
-//! binary), the only allocations during updates are matrixmultiply's packing buffers, exactly
+//! `Sac::update` allocates nothing of its own: with the suite's counting global allocator (per-thread
+//! counters), the only allocations during updates are matrixmultiply's packing buffers, exactly
 //! one per matrix product, all freed again (see `rl_no_alloc.rs` for the same on bare MLPs).
 
 use dualrep::rl::replay::{ReplayBuffer, Transition};
 use dualrep::rl::sac::{HumanCriticConfig, Sac, SacConfig};
 use dualrep::sim::Task;
 
-#[path = "support/counting_alloc.rs"]
-mod counting_alloc;
+use crate::support::counting_alloc;
 
-use counting_alloc::{Counting, count};
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+use counting_alloc::count;
 
 /// Matrix products of one gradient step with `layers` linear layers per network: forward
 /// passes `layers` each, a backward pass with parameter gradients `2 layers - 1`, an

@@ -2,15 +2,11 @@
 //! behind `GET .../recording.rrd`) is read back with the Python `rerun-sdk` of the same version
 //! and checked against the session's step count, its stored answers and its episodes.
 
-mod support {
-    pub mod server;
-}
-#[path = "support/rerun_py.rs"]
-#[allow(dead_code)]
-mod rerun_py;
+use crate::support::rerun_py;
 
 use std::time::{Duration, Instant};
 
+use crate::support::server::{TOKEN, state};
 use axum::body::Body;
 use axum::http::{Request, StatusCode, header};
 use dualrep::http::app;
@@ -20,7 +16,6 @@ use dualrep::sim::Task;
 use dualrep::store::Status;
 use http_body_util::BodyExt;
 use serde_json::{Value, json};
-use support::server::{TOKEN, state};
 use tower::ServiceExt;
 
 fn rows(file: &Value, path: &str) -> u64 {

@@ -2,7 +2,7 @@
 
 use dualrep::guidance::drpl::trainer::Preference;
 use dualrep::guidance::evaluative_run::EpisodeRecord;
-use dualrep::session::AnswerValue;
+use dualrep::session::{AnswerValue, Answerer, QueryKind};
 use dualrep::sim::Outcome;
 use dualrep::store::{CommitOutcome, NewSession, Status, Store, SyntheticAnswer};
 use sqlx::SqlitePool;
@@ -29,27 +29,27 @@ async fn store_with_session(pool: SqlitePool, id: &str) -> Store {
 async fn the_first_committed_answer_wins_and_repeats_are_idempotent(pool: SqlitePool) {
     let store = store_with_session(pool, "s1").await;
     let q = store
-        .upsert_query("s1", 0, "evaluative", 17, 5, "{}")
+        .upsert_query("s1", 0, QueryKind::Evaluative, 17, 5, "{}")
         .await
         .unwrap();
     let good = AnswerValue::Evaluation(1);
     assert_eq!(
         store
-            .commit_answer(q, "s1", good, "trainer", 120)
+            .commit_answer(q, "s1", good, Answerer::Trainer, 120)
             .await
             .unwrap(),
         CommitOutcome::Committed
     );
     assert_eq!(
         store
-            .commit_answer(q, "s1", good, "trainer", 130)
+            .commit_answer(q, "s1", good, Answerer::Trainer, 130)
             .await
             .unwrap(),
         CommitOutcome::AlreadyAnswered(good)
     );
     assert_eq!(
         store
-            .commit_answer(q, "s1", AnswerValue::Evaluation(-1), "timeout", 0)
+            .commit_answer(q, "s1", AnswerValue::Evaluation(-1), Answerer::Timeout, 0)
             .await
             .unwrap(),
         CommitOutcome::AlreadyAnswered(good)
@@ -60,34 +60,34 @@ async fn the_first_committed_answer_wins_and_repeats_are_idempotent(pool: Sqlite
         (answers[0].step, answers[0].value, answers[0].latency_ms),
         (17, good, 120)
     );
-    assert_eq!(answers[0].who, "trainer");
+    assert_eq!(answers[0].who, Answerer::Trainer);
 }
 
 #[sqlx::test]
 async fn a_re_asked_query_keeps_its_id_and_replay_stops_at_the_first_gap(pool: SqlitePool) {
     let store = store_with_session(pool, "s1").await;
     let a = store
-        .upsert_query("s1", 0, "preference", 0, 0, "{}")
+        .upsert_query("s1", 0, QueryKind::Preference, 0, 0, "{}")
         .await
         .unwrap();
     let b = store
-        .upsert_query("s1", 1, "preference", 1, 0, "{}")
+        .upsert_query("s1", 1, QueryKind::Preference, 1, 0, "{}")
         .await
         .unwrap();
     assert_eq!(
         store
-            .upsert_query("s1", 1, "preference", 1, 0, "{}")
+            .upsert_query("s1", 1, QueryKind::Preference, 1, 0, "{}")
             .await
             .unwrap(),
         b
     );
     let c = store
-        .upsert_query("s1", 2, "preference", 2, 0, "{}")
+        .upsert_query("s1", 2, QueryKind::Preference, 2, 0, "{}")
         .await
         .unwrap();
     for (q, v) in [(a, Preference::Left), (c, Preference::Skip)] {
         store
-            .commit_answer(q, "s1", AnswerValue::Preference(v), "trainer", 5)
+            .commit_answer(q, "s1", AnswerValue::Preference(v), Answerer::Trainer, 5)
             .await
             .unwrap();
     }
@@ -109,7 +109,7 @@ async fn synthetic_batches_store_queries_with_answers_once(pool: SqlitePool) {
     let batch: Vec<SyntheticAnswer> = (0..5)
         .map(|i| SyntheticAnswer {
             seq: i,
-            kind: "evaluative",
+            kind: QueryKind::Evaluative,
             step: i * 10,
             abstract_state: 1,
             value: AnswerValue::Evaluation(if i % 2 == 0 { 1 } else { -1 }),
@@ -120,7 +120,7 @@ async fn synthetic_batches_store_queries_with_answers_once(pool: SqlitePool) {
     store.insert_synthetic("s1", &batch).await.unwrap();
     let answers = store.answers("s1").await.unwrap();
     assert_eq!(answers.len(), 5);
-    assert!(answers.iter().all(|a| a.who == "synthetic"));
+    assert!(answers.iter().all(|a| a.who == Answerer::Synthetic));
     assert_eq!(store.replay_answers("s1").await.unwrap().len(), 5);
 }
 
@@ -179,36 +179,48 @@ async fn an_undo_reopens_an_answer_and_the_resume_replays_it_where_it_was_applie
     let store = store_with_session(pool, "s1").await;
     let (good, bad) = (AnswerValue::Evaluation(1), AnswerValue::Evaluation(-1));
     let q0 = store
-        .upsert_query("s1", 0, "evaluative", 3, 1, "{}")
+        .upsert_query("s1", 0, QueryKind::Evaluative, 3, 1, "{}")
         .await
         .unwrap();
     let q1 = store
-        .upsert_query("s1", 1, "evaluative", 9, 1, "{}")
+        .upsert_query("s1", 1, QueryKind::Evaluative, 9, 1, "{}")
         .await
         .unwrap();
     assert_eq!(
-        store.undo_answer(q0, "s1", "evaluative").await.unwrap(),
+        store
+            .undo_answer(q0, "s1", QueryKind::Evaluative)
+            .await
+            .unwrap(),
         UndoOutcome::NotAnswered
     );
     store
-        .commit_answer(q0, "s1", good, "trainer", 50)
+        .commit_answer(q0, "s1", good, Answerer::Trainer, 50)
         .await
         .unwrap();
     store
-        .commit_answer(q1, "s1", good, "trainer", 60)
+        .commit_answer(q1, "s1", good, Answerer::Trainer, 60)
         .await
         .unwrap();
     // Not undone: a new answer does not replace it.
     assert_eq!(
-        store.reanswer(q0, bad, "trainer", 10).await.unwrap(),
+        store
+            .reanswer(q0, bad, Answerer::Trainer, 10)
+            .await
+            .unwrap(),
         ReanswerOutcome::Stands(good)
     );
     assert_eq!(
-        store.undo_answer(q0, "s1", "evaluative").await.unwrap(),
+        store
+            .undo_answer(q0, "s1", QueryKind::Evaluative)
+            .await
+            .unwrap(),
         UndoOutcome::Undone(1)
     );
     assert_eq!(
-        store.undo_answer(q0, "s1", "evaluative").await.unwrap(),
+        store
+            .undo_answer(q0, "s1", QueryKind::Evaluative)
+            .await
+            .unwrap(),
         UndoOutcome::AlreadyUndone
     );
     // Meanwhile the answer reads as "no feedback", what the learner uses.
@@ -218,11 +230,17 @@ async fn an_undo_reopens_an_answer_and_the_resume_replays_it_where_it_was_applie
     );
     store.revision_applied("s1", 0, 1, 4).await.unwrap();
     assert_eq!(
-        store.reanswer(q0, bad, "trainer", 700).await.unwrap(),
+        store
+            .reanswer(q0, bad, Answerer::Trainer, 700)
+            .await
+            .unwrap(),
         ReanswerOutcome::Committed(2)
     );
     assert_eq!(
-        store.reanswer(q0, good, "trainer", 800).await.unwrap(),
+        store
+            .reanswer(q0, good, Answerer::Trainer, 800)
+            .await
+            .unwrap(),
         ReanswerOutcome::Stands(bad),
         "the first new answer wins"
     );

@@ -1,17 +1,12 @@
 //! Real websocket trainers against the server on port 0: a human DREF session and a human DRPL
 //! session driven to their end; several trainers on one query; reconnecting; bad input.
 
-mod support {
-    pub mod server;
-    pub mod trainer;
-}
-
 use std::collections::{HashMap, HashSet};
 use std::time::Duration;
 
+use crate::support::server::{Api, serve};
+use crate::support::trainer::{Trainer, token_of};
 use serde_json::{Value, json};
-use support::server::{Api, serve};
-use support::trainer::{Trainer, token_of};
 
 const WAIT: Duration = Duration::from_secs(60);
 

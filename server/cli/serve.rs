@@ -4,16 +4,14 @@
 
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::Context;
 use axum::http::HeaderValue;
 use clap::Args;
 
-use crate::http::{AppState, app};
-use crate::hub::{Hub, HubConfig, random_hex};
-use crate::store::Store;
+use crate::hub::random_hex;
+use crate::server::{Server, ServerConfig};
 
 #[derive(Debug, Args)]
 pub struct ServeArgs {
@@ -152,7 +150,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
     running.wait().await
 }
 
-/// Open the store, recover, bind and serve in the background.
+/// Open the server, bind and serve in the background.
 pub async fn start(args: ServeArgs) -> anyhow::Result<Running> {
     std::fs::create_dir_all(&args.data_dir)
         .with_context(|| format!("creating the data dir {}", args.data_dir.display()))?;
@@ -165,76 +163,39 @@ pub async fn start(args: ServeArgs) -> anyhow::Result<Running> {
                 .with_context(|| format!("--cors-origin {o:?} is not a valid origin"))
         })
         .collect::<anyhow::Result<Vec<_>>>()?;
-    if let Some(web) = args
-        .web_dir
-        .as_ref()
-        .filter(|w| !w.join("index.html").exists())
-    {
-        anyhow::bail!(
-            "--web-dir {} has no index.html (leave --web-dir out to serve the UI inside the binary)",
-            web.display()
-        );
-    }
-    let store = Store::open(&args.data_dir)
-        .await
-        .with_context(|| format!("opening the database in {}", args.data_dir.display()))?;
     let max_running = args
         .max_sessions
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let hub = Hub::new(
-        store.clone(),
-        HubConfig {
-            data_dir: args.data_dir.clone(),
-            models_dir: args.models_dir.clone(),
-            max_running,
-            rerun_connect: args.rerun_connect.clone(),
-            session_stack_size: None,
-        },
-    );
-    let interrupted = hub.recover().await?;
-    if !interrupted.is_empty() {
+    let server = Server::open(ServerConfig {
+        data_dir: args.data_dir.clone(),
+        token: token.clone(),
+        web_dir: args.web_dir.clone(),
+        models_dir: args.models_dir.clone(),
+        max_running,
+        rerun_connect: args.rerun_connect.clone(),
+        cors_origins,
+        shutdown_grace: Duration::from_secs_f64(args.shutdown_grace_s),
+    })
+    .await?;
+    if !server.interrupted.is_empty() {
         tracing::warn!(
             "{} session(s) were cut off when the server last stopped and can be resumed: {}",
-            interrupted.len(),
-            interrupted.join(", ")
+            server.interrupted.len(),
+            server.interrupted.join(", ")
         );
     }
-    let state = AppState {
-        store,
-        hub: hub.clone(),
-        token: Arc::from(token.as_str()),
-        web_dir: args.web_dir.clone(),
-        data_dir: args.data_dir.clone(),
-        cors_origins,
-    };
     let listener = tokio::net::TcpListener::bind(args.addr)
         .await
         .with_context(|| format!("listening on {}", args.addr))?;
     let addr = listener.local_addr()?;
-    let grace = Duration::from_secs_f64(args.shutdown_grace_s);
-    // Drain the sessions first: their browsers get `ended` and close, and then the server can
-    // finish the connections still open.
     let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
-    let drain = async move {
+    let shutdown = async move {
         tokio::select! {
             () = shutdown_signal() => {},
             _ = stopped => {},
         }
-        tracing::info!("shutting down: sessions checkpoint and end as interrupted");
-        hub.shutdown(grace).await;
     };
-    let task = tokio::spawn(async move {
-        // Answers and acks are small messages: without TCP_NODELAY, Nagle's algorithm and the
-        // peer's delayed ACK hold some of them back ~40 ms.
-        let listener = axum::serve::ListenerExt::tap_io(listener, |tcp| {
-            if let Err(e) = tcp.set_nodelay(true) {
-                tracing::warn!("TCP_NODELAY: {e}");
-            }
-        });
-        axum::serve(listener, app(state))
-            .with_graceful_shutdown(drain)
-            .await
-    });
+    let task = tokio::spawn(server.run(listener, shutdown));
     Ok(Running {
         addr,
         token,

@@ -1,14 +1,17 @@
-//! Who may call what: researcher routes need `Authorization: Bearer <token>`; a trainer's
-//! websocket needs its session's own token (from the `trainer_url`). Comparisons take constant
-//! time so a token cannot be guessed byte by byte.
+//! Who may call what, as extractors: [`Researcher`] for the researcher routes
+//! (`Authorization: Bearer <token>`); [`SessionAccess`] for a session's own routes (its websocket
+//! and its survey), which take the session's trainer token (from the `trainer_url`) or the
+//! researcher's, as a bearer token or as `?token=`. Comparisons take constant time so a token
+//! cannot be guessed byte by byte.
 
-use axum::extract::{Request, State};
+use axum::extract::{FromRequestParts, Path, Query};
 use axum::http::header::AUTHORIZATION;
-use axum::middleware::Next;
-use axum::response::{IntoResponse, Response};
+use axum::http::request::Parts;
+use serde::Deserialize;
 
 use super::AppState;
 use super::error::ApiError;
+use crate::store::SessionRow;
 
 /// Equal in time independent of where the first difference is.
 pub fn same_token(a: &str, b: &str) -> bool {
@@ -19,24 +22,75 @@ pub fn same_token(a: &str, b: &str) -> bool {
             == 0
 }
 
-/// Middleware for researcher routes.
-pub async fn require_researcher(
-    State(state): State<AppState>,
-    request: Request,
-    next: Next,
-) -> Response {
-    let given = request
-        .headers()
+/// The bearer token of a request, if it has one.
+fn bearer(parts: &Parts) -> Option<&str> {
+    parts
+        .headers
         .get(AUTHORIZATION)
         .and_then(|v| v.to_str().ok())
-        .and_then(|v| v.strip_prefix("Bearer "));
-    match given {
-        Some(token) if same_token(token.trim(), &state.token) => next.run(request).await,
-        Some(_) => {
-            ApiError::unauthorized("the bearer token is not the researcher token").into_response()
+        .and_then(|v| v.strip_prefix("Bearer "))
+        .map(str::trim)
+}
+
+/// The caller holds the researcher token.
+#[derive(Clone, Copy, Debug)]
+pub struct Researcher;
+
+impl FromRequestParts<AppState> for Researcher {
+    type Rejection = ApiError;
+
+    async fn from_request_parts(parts: &mut Parts, state: &AppState) -> Result<Self, ApiError> {
+        match bearer(parts) {
+            Some(token) if same_token(token, &state.token) => Ok(Researcher),
+            Some(_) => Err(ApiError::Unauthorized(
+                "the bearer token is not the researcher token".into(),
+            )),
+            None => Err(ApiError::Unauthorized(
+                "researcher routes need `Authorization: Bearer <token>`".into(),
+            )),
         }
-        None => ApiError::unauthorized("researcher routes need `Authorization: Bearer <token>`")
-            .into_response(),
+    }
+}
+
+#[derive(Debug, Deserialize)]
+struct TokenQuery {
+    token: Option<String>,
+}
+
+/// The caller holds the trainer token of the session named in the path (or the researcher
+/// token); the session's row comes with it.
+#[derive(Clone, Debug)]
+pub struct SessionAccess(pub SessionRow);
+
+impl FromRequestParts<AppState> for SessionAccess {
+    type Rejection = ApiError;
+
+    async fn from_request_parts(parts: &mut Parts, state: &AppState) -> Result<Self, ApiError> {
+        let id = match Path::<String>::from_request_parts(parts, state).await {
+            Ok(Path(id)) => id,
+            Err(e) => return Err(ApiError::BadRequest(e.body_text())),
+        };
+        let row = state
+            .store
+            .session(&id)
+            .await?
+            .ok_or_else(|| ApiError::NotFound(format!("no session {id}")))?;
+        let query = Query::<TokenQuery>::try_from_uri(&parts.uri)
+            .ok()
+            .and_then(|q| q.0.token);
+        let Some(token) = bearer(parts).map(str::to_owned).or(query) else {
+            return Err(ApiError::Unauthorized(
+                "send the session's trainer token as `Authorization: Bearer <token>` or `?token=<token>`"
+                    .into(),
+            ));
+        };
+        if same_token(&token, &row.trainer_token) || same_token(&token, &state.token) {
+            Ok(SessionAccess(row))
+        } else {
+            Err(ApiError::Forbidden(format!(
+                "this token is not valid for session {id}"
+            )))
+        }
     }
 }
 

@@ -61,10 +61,7 @@ pub fn app(state: AppState) -> Router {
         .route("/api/sessions/{id}/alignment", get(sessions::alignment))
         .route("/api/sessions/{id}/export", get(sessions::export))
         .route("/api/sessions/{id}/recording.rrd", get(recording))
-        .route_layer(middleware::from_fn_with_state(
-            state.clone(),
-            auth::require_researcher,
-        ));
+        .route_layer(middleware::from_extractor_with_state::<auth::Researcher, _>(state.clone()));
     let mut router = Router::new()
         .merge(researcher)
         .route("/api/sessions/{id}/survey", post(sessions::survey))
@@ -116,29 +113,24 @@ fn serve_shipped(path: &str) -> Response {
 }
 
 async fn api_not_found() -> ApiError {
-    ApiError::not_found("no such API route; see /api/openapi.json")
+    ApiError::NotFound("no such API route; see /api/openapi.json".into())
 }
 
 async fn healthz(State(state): State<AppState>) -> Response {
     match state.store.ping().await {
         Ok(()) => Json(serde_json::json!({"status": "ok"})).into_response(),
-        Err(e) => ApiError::new(
-            StatusCode::SERVICE_UNAVAILABLE,
-            "unhealthy",
-            format!("the database does not answer: {e}"),
-        )
-        .into_response(),
+        Err(e) => ApiError::Unhealthy(e.to_string()).into_response(),
     }
 }
 
 /// `<data dir>/recordings/<id>.rrd`, written by the session's recorder.
 async fn recording(State(state): State<AppState>, Path(id): Path<String>) -> ApiResult<Response> {
     if state.store.session(&id).await?.is_none() {
-        return Err(ApiError::not_found(format!("no session {id}")));
+        return Err(ApiError::NotFound(format!("no session {id}")));
     }
     let path = state.hub.recording_path(&id);
     let bytes = tokio::fs::read(&path).await.map_err(|_| {
-        ApiError::not_found(format!(
+        ApiError::NotFound(format!(
             "session {id} has no recording (recording was off, or it has not started)"
         ))
     })?;

@@ -10,6 +10,7 @@ use axum::response::{IntoResponse, Response};
 use serde::{Deserialize, Serialize};
 
 use super::AppState;
+use super::auth::SessionAccess;
 use super::error::{ApiError, ApiResult};
 use crate::session::spec::DEFAULT_QUERIES;
 use crate::session::{SessionMethod, SessionSpec, TrainerKind};
@@ -100,16 +101,13 @@ pub fn trainer_url(row: &SessionRow) -> String {
 }
 
 async fn view(state: &AppState, row: SessionRow) -> ApiResult<SessionView> {
-    let status = state.hub.status_of(&row);
-    let live = state.hub.live(&row.id);
-    let (progress, latest) = match &live {
-        Some(l) if status.is_active() => {
-            let p = l.lock().progress.clone();
-            (
-                p.progress as i64,
-                serde_json::to_value(p).unwrap_or_default(),
-            )
-        }
+    let snapshot = state.hub.session(&row.id).map(|s| s.snapshot());
+    let status = snapshot.as_ref().map_or(row.status, |s| s.status);
+    let (progress, latest) = match snapshot {
+        Some(s) if status.is_active() => (
+            s.progress.progress as i64,
+            serde_json::to_value(s.progress).unwrap_or_default(),
+        ),
         _ => (row.progress, row.latest.clone()),
     };
     let answers = state.store.answer_counts(&row.id).await?;
@@ -143,7 +141,7 @@ async fn row(state: &AppState, id: &str) -> ApiResult<SessionRow> {
         .store
         .session(id)
         .await?
-        .ok_or_else(|| ApiError::not_found(format!("no session {id}")))
+        .ok_or_else(|| ApiError::NotFound(format!("no session {id}")))
 }
 
 pub async fn create(
@@ -151,17 +149,10 @@ pub async fn create(
     body: Result<Json<LaunchRequest>, JsonRejection>,
 ) -> ApiResult<(StatusCode, Json<serde_json::Value>)> {
     let Json(request) = body.map_err(|e| match e.status() {
-        StatusCode::PAYLOAD_TOO_LARGE => ApiError::new(
-            StatusCode::PAYLOAD_TOO_LARGE,
-            "payload_too_large",
-            format!(
-                "request bodies are limited to {} bytes",
-                super::MAX_BODY_BYTES
-            ),
-        ),
-        _ => ApiError::bad_request(e.body_text()),
+        StatusCode::PAYLOAD_TOO_LARGE => ApiError::PayloadTooLarge(super::MAX_BODY_BYTES),
+        _ => ApiError::BadRequest(e.body_text()),
     })?;
-    let spec = request.into_spec().map_err(ApiError::bad_request)?;
+    let spec = request.into_spec().map_err(ApiError::BadRequest)?;
     let row = state.hub.launch(spec).await?;
     let status = state.hub.status_of(&row);
     Ok((
@@ -265,13 +256,7 @@ pub async fn export(
         }
         "csv" => {
             let mut w = csv::Writer::from_writer(Vec::new());
-            let io = |e: csv::Error| {
-                ApiError::new(
-                    StatusCode::INTERNAL_SERVER_ERROR,
-                    "export_failed",
-                    e.to_string(),
-                )
-            };
+            let io = |e: csv::Error| ApiError::ExportFailed(e.to_string());
             w.write_record([
                 "query_id",
                 "seq",
@@ -291,11 +276,11 @@ pub async fn export(
                 w.write_record([
                     a.query_id.to_string(),
                     a.seq.to_string(),
-                    a.kind.clone(),
+                    a.kind.as_str().to_string(),
                     a.step.to_string(),
                     a.abstract_state.to_string(),
                     value.trim_matches('"').to_string(),
-                    a.who.clone(),
+                    a.who.as_str().to_string(),
                     a.asked_at.clone(),
                     a.answered_at.clone(),
                     a.latency_ms.to_string(),
@@ -303,13 +288,9 @@ pub async fn export(
                 ])
                 .map_err(io)?;
             }
-            let bytes = w.into_inner().map_err(|e| {
-                ApiError::new(
-                    StatusCode::INTERNAL_SERVER_ERROR,
-                    "export_failed",
-                    e.to_string(),
-                )
-            })?;
+            let bytes = w
+                .into_inner()
+                .map_err(|e| ApiError::ExportFailed(e.to_string()))?;
             (
                 String::from_utf8_lossy(&bytes).into_owned(),
                 "text/csv",
@@ -317,7 +298,7 @@ pub async fn export(
             )
         }
         other => {
-            return Err(ApiError::bad_request(format!(
+            return Err(ApiError::BadRequest(format!(
                 "format {other:?}: expected jsonl or csv"
             )));
         }
@@ -339,35 +320,15 @@ pub async fn export(
 /// answers to the three questions, once the session has ended.
 pub async fn survey(
     State(state): State<AppState>,
-    Path(id): Path<String>,
-    headers: axum::http::HeaderMap,
+    SessionAccess(r): SessionAccess,
     body: Result<Json<Survey>, JsonRejection>,
 ) -> ApiResult<Json<SessionView>> {
-    let r = row(&state, &id).await?;
-    let token = headers
-        .get(header::AUTHORIZATION)
-        .and_then(|v| v.to_str().ok())
-        .and_then(|v| v.strip_prefix("Bearer "))
-        .map(str::trim)
-        .ok_or_else(|| {
-            ApiError::unauthorized("send the trainer token as `Authorization: Bearer <token>`")
-        })?;
-    if !super::auth::same_token(token, &r.trainer_token)
-        && !super::auth::same_token(token, &state.token)
-    {
-        return Err(ApiError::new(
-            StatusCode::FORBIDDEN,
-            "forbidden",
-            format!("this token is not valid for session {id}"),
-        ));
-    }
-    let Json(survey) = body.map_err(|e| ApiError::bad_request(e.body_text()))?;
-    survey.validate().map_err(ApiError::bad_request)?;
+    let id = r.id.clone();
+    let Json(survey) = body.map_err(|e| ApiError::BadRequest(e.body_text()))?;
+    survey.validate().map_err(ApiError::BadRequest)?;
     if state.hub.status_of(&r).is_active() {
-        return Err(ApiError::new(
-            StatusCode::CONFLICT,
-            "conflict",
-            "the questions come after the session has ended",
+        return Err(ApiError::Conflict(
+            "the questions come after the session has ended".into(),
         ));
     }
     state.store.save_survey(&id, &survey).await?;
@@ -383,7 +344,7 @@ pub async fn episode_frames(
     row(&state, &id).await?;
     let path = state.hub.frames_path(&id, episode);
     let bytes = tokio::fs::read(&path).await.map_err(|_| {
-        ApiError::not_found(format!(
+        ApiError::NotFound(format!(
             "no frames of episode {episode} of session {id} (frames are kept for the episodes of human sessions)"
         ))
     })?;

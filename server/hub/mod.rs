@@ -1,18 +1,24 @@
-//! The hub: every session the server knows, started on their own threads under a cap on how
-//! many run at once (the rest queue), each paired with an async consumer of its events.
-//! Stop, resume and graceful shutdown go through here.
+//! The hub: every session the server knows, each owned by one task (module `owner`) that
+//! holds its live state, waits for one of a capped number of slots while queued, and runs the
+//! session on its own thread. Launch, stop, resume and graceful shutdown go through here; the
+//! rest of the server reaches a session through its [`SessionHandle`].
 //!
-//! - `live`: one session's live state and the answer path.
-//! - `consumer`: applies a session's events to the store and the browsers.
-//! - `sink`: the channel a session thread reports into.
+//! - `handle`: the commands an owner takes and the snapshot it publishes.
+//! - `owner`: the session's task, its `select!` loop and its status.
+//! - `events`: applying the session thread's events (store, browsers).
+//! - `answers`: the answer path, deadlines and undo.
+//! - `thread`: starting the session thread; `sink`: the channel it reports into.
 //! - `recording`: the session's Rerun recording as its observer.
-//! - `undo`: taking back an answer and answering the query again.
+//! - `episode_frames`: the frames kept for replay.
 
-mod consumer;
-pub mod live;
+mod answers;
+mod episode_frames;
+mod events;
+mod handle;
+mod owner;
 mod recording;
 mod sink;
-pub mod undo;
+mod thread;
 
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -23,9 +29,10 @@ use rand::Rng;
 use tokio::sync::Semaphore;
 use tokio::task::JoinHandle;
 
-pub use live::{AnswerReply, Live};
+pub use answers::UNDO_WINDOW;
+pub use handle::{AnswerReply, Joined, SessionHandle, Snapshot};
 
-use crate::session::{Controls, SessionContext, SessionSpec, run_session};
+use crate::session::SessionSpec;
 use crate::store::{NewSession, SessionRow, Status, Store};
 
 /// How the hub runs sessions.
@@ -47,7 +54,7 @@ pub struct HubConfig {
 pub struct Hub {
     pub store: Store,
     pub config: HubConfig,
-    live: Mutex<HashMap<String, Arc<Live>>>,
+    sessions: Mutex<HashMap<String, SessionHandle>>,
     slots: Arc<Semaphore>,
     tasks: Mutex<Vec<JoinHandle<()>>>,
 }
@@ -79,7 +86,7 @@ impl Hub {
         Arc::new(Self {
             store,
             config,
-            live: Mutex::new(HashMap::new()),
+            sessions: Mutex::new(HashMap::new()),
             slots,
             tasks: Mutex::new(Vec::new()),
         })
@@ -90,7 +97,7 @@ impl Hub {
         let (interrupted, queued) = self.store.recover_after_restart().await?;
         for id in queued {
             if let Some(row) = self.store.session(&id).await? {
-                self.start(row)?;
+                self.start(row).await?;
             }
         }
         Ok(interrupted)
@@ -117,12 +124,13 @@ impl Hub {
                 trainer_token: &token,
             })
             .await?;
-        self.start(row.clone())?;
+        self.start(row.clone()).await?;
         Ok(row)
     }
 
-    pub fn live(&self, id: &str) -> Option<Arc<Live>> {
-        self.live
+    /// The session's handle while the hub runs it (queued, running or waiting).
+    pub fn session(&self, id: &str) -> Option<SessionHandle> {
+        self.sessions
             .lock()
             .unwrap_or_else(|e| e.into_inner())
             .get(id)
@@ -130,142 +138,41 @@ impl Hub {
     }
 
     /// Drop an ended session from the map (unless a resume already replaced it).
-    /// A session that could not start: `failed` with `reason`, in the database and in memory,
-    /// and no longer live, so that it can be resumed.
-    async fn fail_to_start(&self, live: &Arc<Live>, reason: &str) {
-        tracing::error!(session = %live.id, "{reason}");
-        let _ = self
-            .store
-            .set_status(&live.id, Status::Failed, Some(reason))
-            .await;
-        live.lock().status = Status::Failed;
-        self.forget(live);
-    }
-
-    fn forget(&self, live: &Arc<Live>) {
-        let mut map = self.live.lock().unwrap_or_else(|e| e.into_inner());
-        if map.get(&live.id).is_some_and(|l| Arc::ptr_eq(l, live)) {
-            map.remove(&live.id);
+    fn forget(&self, key: &Arc<str>) {
+        let mut map = self.sessions.lock().unwrap_or_else(|e| e.into_inner());
+        if map.get(&**key).is_some_and(|h| Arc::ptr_eq(&h.id, key)) {
+            map.remove(&**key);
         }
     }
 
-    /// Queue a stored session: wait for a slot, then run it on its own thread.
-    fn start(self: &Arc<Self>, row: SessionRow) -> Result<(), HubError> {
+    /// Queue a stored session under a new owner (stored as `queued` before this returns).
+    async fn start(self: &Arc<Self>, row: SessionRow) -> Result<(), HubError> {
         let spec = row.spec().map_err(HubError::Invalid)?;
         let timeout = spec.settings().map_err(HubError::Invalid)?.answer_timeout_s;
-        let live = Arc::new(Live::new(
+        let (mut owner, handle, commands) = owner::Owner::new(
+            self.clone(),
             row.id.clone(),
             spec,
-            row.trainer_token.clone(),
             Duration::from_secs_f64(timeout),
-        ));
+        );
         {
-            let mut map = self.live.lock().unwrap_or_else(|e| e.into_inner());
-            if map
-                .get(&row.id)
-                .is_some_and(|l| l.lock().status.is_active())
-            {
+            let mut map = self.sessions.lock().unwrap_or_else(|e| e.into_inner());
+            if map.get(&row.id).is_some_and(|h| h.status().is_active()) {
                 return Err(HubError::Conflict(format!(
-                    "session {} is already {}",
-                    row.id, "active"
+                    "session {} is already active",
+                    row.id
                 )));
             }
-            map.insert(row.id.clone(), live.clone());
+            map.insert(row.id.clone(), handle);
         }
-        let hub = self.clone();
-        let task = tokio::spawn(async move { hub.run(live).await });
+        if row.status != Status::Queued {
+            owner.set_status(Status::Queued, None).await;
+        }
+        let task = tokio::spawn(owner.run(commands));
         let mut tasks = self.tasks.lock().unwrap_or_else(|e| e.into_inner());
         tasks.retain(|t| !t.is_finished());
         tasks.push(task);
         Ok(())
-    }
-
-    async fn run(self: Arc<Self>, live: Arc<Live>) {
-        let Ok(_slot) = self.slots.clone().acquire_owned().await else {
-            return; // the hub is shutting down
-        };
-        if live.lock().stop_requested {
-            self.forget(&live); // stopped while queued; `stop` stored the status
-            return;
-        }
-        let id = live.id.clone();
-        let (stored_answers, stored_revisions, checkpoint) = match (
-            self.store.replay_answers(&id).await,
-            self.store.replay_revisions(&id).await,
-            self.store.latest_checkpoint(&id).await,
-        ) {
-            (Ok(a), Ok(r), Ok(c)) => (a, r, c),
-            (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => {
-                let reason = format!("reading the session's answers: {e}");
-                self.fail_to_start(&live, &reason).await;
-                return;
-            }
-        };
-        // A checkpoint is checked only if the replay reaches it with stored answers alone.
-        let verify = checkpoint
-            .filter(|c| c.answers as usize <= stored_answers.len())
-            .map(|c| (c.progress as u64, c.digest));
-        let recording = match self.recording_options(&live) {
-            Ok(r) => r,
-            Err(reason) => {
-                self.fail_to_start(&live, &reason).await;
-                return;
-            }
-        };
-        let (control_tx, control_rx) = std::sync::mpsc::channel();
-        let (event_tx, event_rx) = tokio::sync::mpsc::unbounded_channel();
-        live.lock().control = Some(control_tx);
-        let ctx = SessionContext {
-            sink: Arc::new(sink::ChannelSink(event_tx.clone())),
-            controls: Controls::new(control_rx),
-            stored_answers,
-            stored_revisions,
-            verify,
-            models_dir: self.config.models_dir.clone(),
-            observer: None,
-        };
-        let spec = live.spec.clone();
-        let spec_id = id.clone();
-        let mut builder = std::thread::Builder::new().name(format!("session-{id}"));
-        if let Some(bytes) = self.config.session_stack_size {
-            builder = builder.stack_size(bytes);
-        }
-        let spawned = builder.spawn(move || {
-            let mut ctx = ctx;
-            // Opening the file (and a viewer connection) is blocking IO: here, not on the
-            // async runtime.
-            let (options, graph) = recording;
-            match recording::start(&spec_id, graph, &options) {
-                Ok(observer) => ctx.observer = observer,
-                Err(e) => {
-                    let _ = event_tx.send(crate::session::SessionEvent::Ended(
-                        crate::session::Ending::Failed(format!(
-                            "the recording could not start: {e:#}"
-                        )),
-                    ));
-                    return;
-                }
-            }
-            let result =
-                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run_session(&spec, ctx)));
-            if let Err(panic) = result {
-                let what = panic
-                    .downcast_ref::<String>()
-                    .cloned()
-                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-                    .unwrap_or_else(|| "unknown".into());
-                let _ = event_tx.send(crate::session::SessionEvent::Ended(
-                    crate::session::Ending::Failed(format!("the session panicked: {what}")),
-                ));
-            }
-        });
-        if let Err(e) = spawned {
-            live.lock().control = None;
-            let reason = format!("the session's thread could not start: {e}");
-            self.fail_to_start(&live, &reason).await;
-            return;
-        }
-        consumer::consume(self.clone(), live, event_rx).await;
     }
 
     /// Stop a session for good (it can still be resumed later).
@@ -275,32 +182,14 @@ impl Hub {
             .session(id)
             .await?
             .ok_or_else(|| HubError::NotFound(id.into()))?;
-        let Some(live) = self.live(id).filter(|l| l.lock().status.is_active()) else {
-            return Err(HubError::Conflict(format!(
+        let handle = self.session(id).filter(|h| h.status().is_active());
+        match handle {
+            Some(h) if h.stop().await => Ok(()),
+            _ => Err(HubError::Conflict(format!(
                 "session {id} is {}, not running",
-                row.status.as_str()
-            )));
-        };
-        let queued = {
-            let mut s = live.lock();
-            s.stop_requested = true;
-            match &s.control {
-                Some(c) => {
-                    let _ = c.send(crate::session::Control::Stop);
-                    false
-                }
-                None => {
-                    s.status = Status::Stopped;
-                    true
-                }
-            }
-        };
-        if queued {
-            self.store
-                .set_status(id, Status::Stopped, Some("stopped while queued"))
-                .await?;
+                self.status_of(&row).as_str()
+            ))),
         }
-        Ok(())
     }
 
     /// Continue an interrupted, stopped or failed session: it replays its stored answers (never
@@ -311,44 +200,40 @@ impl Hub {
             .session(id)
             .await?
             .ok_or_else(|| HubError::NotFound(id.into()))?;
-        let live_status = self.live(id).map(|l| l.lock().status);
-        let status = live_status.unwrap_or(row.status);
+        let status = self.status_of(&row);
         if !status.is_resumable() {
             return Err(HubError::Conflict(format!(
                 "session {id} is {}: only interrupted, stopped or failed sessions resume",
                 status.as_str()
             )));
         }
-        self.store.set_status(id, Status::Queued, None).await?;
+        self.start(row).await?;
         let row = self
             .store
             .session(id)
             .await?
             .ok_or_else(|| HubError::NotFound(id.into()))?;
-        self.start(row.clone())?;
         Ok(row)
     }
 
     /// The status a client should see: the live one while the hub runs the session.
     pub fn status_of(&self, row: &SessionRow) -> Status {
-        self.live(&row.id).map_or(row.status, |l| l.lock().status)
+        self.session(&row.id).map_or(row.status, |h| h.status())
     }
 
     /// Graceful shutdown: every running session checkpoints and ends as `interrupted`; browsers
     /// get `ended`. Queued sessions stay queued for the next start.
     pub async fn shutdown(&self, grace: Duration) {
         self.slots.close();
-        let lives: Vec<Arc<Live>> = self
-            .live
+        let sessions: Vec<SessionHandle> = self
+            .sessions
             .lock()
             .unwrap_or_else(|e| e.into_inner())
             .values()
             .cloned()
             .collect();
-        for live in &lives {
-            if let Some(c) = &live.lock().control {
-                let _ = c.send(crate::session::Control::Shutdown);
-            }
+        for session in &sessions {
+            session.shutdown();
         }
         let tasks: Vec<JoinHandle<()>> =
             std::mem::take(&mut *self.tasks.lock().unwrap_or_else(|e| e.into_inner()));
@@ -366,28 +251,6 @@ impl Hub {
             .data_dir
             .join("recordings")
             .join(format!("{id}.rrd"))
-    }
-
-    /// Where and how a session records: its file unless recording is off, and the viewer to
-    /// stream to (its own, else the server's).
-    fn recording_options(
-        &self,
-        live: &Live,
-    ) -> Result<
-        (
-            crate::record::RecordingOptions,
-            crate::scene_graph::SceneGraph,
-        ),
-        String,
-    > {
-        let settings = live.spec.settings()?;
-        let options = crate::record::RecordingOptions {
-            path: settings.record.then(|| self.recording_path(&live.id)),
-            connect: settings
-                .rerun_connect
-                .or_else(|| self.config.rerun_connect.clone()),
-        };
-        Ok((options, live.spec.scene_graph()?))
     }
 
     /// Where the frames of a human session's episode are kept: `<data dir>/frames/<id>/<n>.json`.
@@ -416,3 +279,6 @@ impl Hub {
         Ok(relative)
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -2,7 +2,7 @@
 
 use crate::record::{Recorder, RecordingOptions};
 use crate::scene_graph::{AbstractState, SceneGraph};
-use crate::session::{AnswerValue, Observer};
+use crate::session::{AnswerValue, Observer, QueryKind};
 use crate::sim::{Geometry, RenderState};
 
 /// The session's recorder as its observer (`None` when recording is off and no viewer is set).
@@ -46,8 +46,8 @@ impl Observer for Recording {
         );
     }
 
-    fn query(&mut self, step: u64, seq: u64, kind: &str, text: String) {
-        self.0.query(step, seq as i64, kind, text);
+    fn query(&mut self, step: u64, seq: u64, kind: QueryKind, text: String) {
+        self.0.query(step, seq as i64, kind.as_str(), text);
     }
 
     fn answer(&mut self, step: u64, seq: u64, value: AnswerValue) {

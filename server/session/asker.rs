@@ -16,7 +16,7 @@ use crate::scene_graph::SceneGraph;
 use crate::sim::{EnvOptions, Task};
 
 use super::events::{
-    AnswerValue, Controls, Observer, Revision, SessionEvent, SessionSink, StoredRevision,
+    AnswerValue, Controls, Observer, QueryKind, Revision, SessionEvent, SessionSink, StoredRevision,
 };
 use super::query::{self, FrameHistory, QueryContent};
 use super::runner::SessionContext;
@@ -121,7 +121,7 @@ impl Asker {
         &mut self,
         step: u64,
         abstract_state: u32,
-        kind: &'static str,
+        kind: QueryKind,
         describe: String,
         content: impl FnOnce() -> QueryContent,
     ) -> Option<AnswerValue> {
@@ -155,7 +155,7 @@ impl Asker {
         &mut self,
         step: u64,
         abstract_state: u32,
-        kind: &'static str,
+        kind: QueryKind,
         describe: String,
         value: AnswerValue,
     ) {
@@ -201,7 +201,7 @@ impl EvaluativeTrainer for EvaluativeAsker {
                 .ask(
                     q.step,
                     q.abstract_state.0,
-                    "evaluative",
+                    QueryKind::Evaluative,
                     describe_evaluative(graph, q),
                     || QueryContent::Evaluative {
                         clip: history.clip().expect("the history starts with the episode"),
@@ -223,7 +223,7 @@ impl EvaluativeTrainer for EvaluativeAsker {
                 self.asker.report(
                     q.step,
                     q.abstract_state.0,
-                    "evaluative",
+                    QueryKind::Evaluative,
                     describe,
                     AnswerValue::evaluation(e),
                 );
@@ -267,7 +267,7 @@ impl PreferenceTrainer for PreferenceAsker {
                 .ask(
                     q.query as u64,
                     state,
-                    "preference",
+                    QueryKind::Preference,
                     describe_preference(graph, q),
                     || QueryContent::Preference {
                         left: query::render_clip(
@@ -299,7 +299,7 @@ impl PreferenceTrainer for PreferenceAsker {
                 self.asker.report(
                     q.query as u64,
                     state,
-                    "preference",
+                    QueryKind::Preference,
                     describe,
                     AnswerValue::Preference(p),
                 );

@@ -15,6 +15,58 @@ use crate::sim::{Geometry, RenderState};
 
 use super::query::QueryContent;
 
+/// Which answers a query takes: a +1 / 0 / -1 judgement (DREF, EF) or a preference between two
+/// segments (DRPL and the other preference methods).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum QueryKind {
+    Evaluative,
+    Preference,
+}
+
+impl QueryKind {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            QueryKind::Evaluative => "evaluative",
+            QueryKind::Preference => "preference",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<Self> {
+        [QueryKind::Evaluative, QueryKind::Preference]
+            .into_iter()
+            .find(|k| k.as_str() == s)
+    }
+}
+
+/// Who gave an answer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Answerer {
+    /// A person, through the websocket.
+    Trainer,
+    /// The session's synthetic trainer (an expert oracle or a reward).
+    Synthetic,
+    /// Nobody: the answer timeout gave "no feedback" (or skipped the pair).
+    Timeout,
+}
+
+impl Answerer {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Answerer::Trainer => "trainer",
+            Answerer::Synthetic => "synthetic",
+            Answerer::Timeout => "timeout",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<Self> {
+        [Answerer::Trainer, Answerer::Synthetic, Answerer::Timeout]
+            .into_iter()
+            .find(|k| k.as_str() == s)
+    }
+}
+
 /// A trainer's answer as the websocket carries it: `1 | 0 | -1` or `"left" | "right" | "equal" |
 /// "skip"`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -44,21 +96,19 @@ impl AnswerValue {
         }
     }
 
-    /// Whether this value answers a query of `kind` (`evaluative` or `preference`).
-    pub fn fits(self, kind: &str) -> bool {
+    /// Whether this value answers a query of `kind`.
+    pub fn fits(self, kind: QueryKind) -> bool {
         match kind {
-            "evaluative" => self.as_evaluation().is_some(),
-            "preference" => self.as_preference().is_some(),
-            _ => false,
+            QueryKind::Evaluative => self.as_evaluation().is_some(),
+            QueryKind::Preference => self.as_preference().is_some(),
         }
     }
 
     /// What a trainer who never answered gave: "no feedback" (as the paper allows) or a skip.
-    pub fn timeout(kind: &str) -> Self {
-        if kind == "preference" {
-            AnswerValue::Preference(Preference::Skip)
-        } else {
-            AnswerValue::Evaluation(0)
+    pub fn timeout(kind: QueryKind) -> Self {
+        match kind {
+            QueryKind::Preference => AnswerValue::Preference(Preference::Skip),
+            QueryKind::Evaluative => AnswerValue::Evaluation(0),
         }
     }
 
@@ -131,7 +181,7 @@ pub enum SessionEvent {
         seq: u64,
         step: u64,
         abstract_state: u32,
-        kind: &'static str,
+        kind: QueryKind,
         value: AnswerValue,
     },
     Episode(EpisodeRecord),
@@ -179,7 +229,7 @@ pub trait Observer: Send {
     );
     /// Query `seq` was asked at `step` (a replayed one too: a resumed session's recording is
     /// whole).
-    fn query(&mut self, step: u64, seq: u64, kind: &str, text: String);
+    fn query(&mut self, step: u64, seq: u64, kind: QueryKind, text: String);
     fn answer(&mut self, step: u64, seq: u64, value: AnswerValue);
     /// The answer to query `seq` was undone (`None`) or given again after an undo, taking
     /// effect at `progress` (steps or queries done).
@@ -324,10 +374,10 @@ mod tests {
         let v: AnswerValue = serde_json::from_str("\"equal\"").unwrap();
         assert_eq!(v.as_preference(), Some(Preference::Equal));
         assert!(serde_json::from_str::<AnswerValue>("\"maybe\"").is_err());
-        assert!(!AnswerValue::Evaluation(2).fits("evaluative"));
-        assert!(!AnswerValue::Evaluation(1).fits("preference"));
+        assert!(!AnswerValue::Evaluation(2).fits(QueryKind::Evaluative));
+        assert!(!AnswerValue::Evaluation(1).fits(QueryKind::Preference));
         assert_eq!(
-            serde_json::to_string(&AnswerValue::timeout("preference")).unwrap(),
+            serde_json::to_string(&AnswerValue::timeout(QueryKind::Preference)).unwrap(),
             "\"skip\""
         );
     }

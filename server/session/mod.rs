@@ -16,8 +16,8 @@ pub mod spec;
 
 pub use asker::{load_expert, load_task_expert};
 pub use events::{
-    AnswerValue, Checkpoint, Control, Controls, Ending, Frame, Observer, Revision, SessionEvent,
-    SessionSink, StoredRevision,
+    AnswerValue, Answerer, Checkpoint, Control, Controls, Ending, Frame, Observer, QueryKind,
+    Revision, SessionEvent, SessionSink, StoredRevision,
 };
 pub use query::{Clip, QueryContent};
 pub use runner::{SessionContext, digest, run_session};

@@ -14,6 +14,8 @@ use crate::guidance::evaluative_run::EvaluativeRunConfig;
 use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::sim::Task;
 
+use super::events::QueryKind;
+
 /// A human session's control rate when the researcher does not set `pace_hz`: the robot's own.
 pub const DEFAULT_PACE_HZ: f64 = 20.0;
 /// How long a query waits for a person before it counts as "no feedback" (or a skipped pair).
@@ -57,10 +59,10 @@ impl SessionMethod {
     }
 
     /// The kind of query this method asks, as the API and the database name it.
-    pub fn query_kind(self) -> &'static str {
+    pub fn query_kind(self) -> QueryKind {
         match self {
-            SessionMethod::Evaluative(_) => "evaluative",
-            SessionMethod::Preference(_) => "preference",
+            SessionMethod::Evaluative(_) => QueryKind::Evaluative,
+            SessionMethod::Preference(_) => QueryKind::Preference,
         }
     }
 }

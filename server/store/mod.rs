@@ -20,6 +20,7 @@ macro_rules! now {
 
 mod alignments;
 mod checkpoints;
+mod columns;
 mod episodes;
 mod queries;
 mod revisions;

@@ -6,7 +6,7 @@ use serde::Serialize;
 use sqlx::Row;
 
 use super::{Result, Store};
-use crate::session::AnswerValue;
+use crate::session::{AnswerValue, Answerer, QueryKind};
 
 /// One asked query.
 #[derive(Clone, Debug, Serialize)]
@@ -14,7 +14,7 @@ pub struct QueryRow {
     pub id: i64,
     pub session_id: String,
     pub seq: i64,
-    pub kind: String,
+    pub kind: QueryKind,
     pub step: i64,
     pub abstract_state: i64,
     pub asked_at: String,
@@ -25,12 +25,11 @@ pub struct QueryRow {
 pub struct AnswerRow {
     pub query_id: i64,
     pub seq: i64,
-    pub kind: String,
+    pub kind: QueryKind,
     pub step: i64,
     pub abstract_state: i64,
     pub value: AnswerValue,
-    /// `trainer`, `synthetic` or `timeout`.
-    pub who: String,
+    pub who: Answerer,
     pub asked_at: String,
     pub answered_at: String,
     pub latency_ms: i64,
@@ -51,7 +50,7 @@ pub enum CommitOutcome {
 #[derive(Clone, Debug)]
 pub struct SyntheticAnswer {
     pub seq: u64,
-    pub kind: &'static str,
+    pub kind: QueryKind,
     pub step: u64,
     pub abstract_state: u32,
     pub value: AnswerValue,
@@ -72,7 +71,7 @@ impl Store {
         &self,
         session_id: &str,
         seq: u64,
-        kind: &str,
+        kind: QueryKind,
         step: u64,
         abstract_state: u32,
         payload: &str,
@@ -129,7 +128,7 @@ impl Store {
         query_id: i64,
         session_id: &str,
         value: AnswerValue,
-        who: &str,
+        who: Answerer,
         latency_ms: u64,
     ) -> Result<CommitOutcome> {
         let (reply, outcome) = tokio::sync::oneshot::channel();
@@ -137,7 +136,7 @@ impl Store {
             query_id,
             session_id: session_id.to_string(),
             value,
-            who: who.to_string(),
+            who,
             latency_ms,
             reply,
         };
@@ -300,7 +299,7 @@ pub(super) struct CommitRequest {
     query_id: i64,
     session_id: String,
     value: AnswerValue,
-    who: String,
+    who: Answerer,
     latency_ms: u64,
     reply: tokio::sync::oneshot::Sender<Result<CommitOutcome>>,
 }
@@ -353,7 +352,7 @@ async fn commit_batch(
         row.push_bind(r.query_id)
             .push_bind(r.session_id.clone())
             .push_bind(value_json(r.value))
-            .push_bind(r.who.clone())
+            .push_bind(r.who)
             .push_bind(r.latency_ms as i64)
             .push(now!());
     });

@@ -7,8 +7,8 @@ use sqlx::Row;
 
 use super::queries::{parse_value, value_json};
 use super::{Result, Store};
-use crate::session::AnswerValue;
 use crate::session::events::{Revision, StoredRevision};
+use crate::session::{AnswerValue, Answerer, QueryKind};
 
 /// What an undo did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -37,7 +37,7 @@ impl Store {
         &self,
         query_id: i64,
         session_id: &str,
-        kind: &str,
+        kind: QueryKind,
     ) -> Result<UndoOutcome> {
         let mut tx = self.writer().begin().await?;
         let Some(row) = sqlx::query(
@@ -68,7 +68,7 @@ impl Store {
         let undo = RevisionRow {
             revision: next,
             value: None,
-            who: "trainer".into(),
+            who: Answerer::Trainer,
             latency_ms: 0,
         };
         undo.insert(&mut tx, query_id, session_id).await?;
@@ -87,7 +87,7 @@ impl Store {
         &self,
         query_id: i64,
         value: AnswerValue,
-        who: &str,
+        who: Answerer,
         latency_ms: u64,
     ) -> Result<ReanswerOutcome> {
         let mut tx = self.writer().begin().await?;
@@ -103,7 +103,7 @@ impl Store {
         let again = RevisionRow {
             revision: next,
             value: Some(value_json(value)),
-            who: who.into(),
+            who,
             latency_ms: latency_ms as i64,
         };
         let session_id: String = row.get("session_id");
@@ -178,7 +178,7 @@ struct RevisionRow {
     revision: i64,
     /// JSON; `None` for an undo.
     value: Option<String>,
-    who: String,
+    who: Answerer,
     latency_ms: i64,
 }
 
@@ -200,7 +200,7 @@ impl RevisionRow {
         .bind(session_id)
         .bind(self.revision)
         .bind(self.value.as_deref())
-        .bind(&self.who)
+        .bind(self.who)
         .bind(self.latency_ms)
         .execute(tx)
         .await?;

@@ -179,7 +179,7 @@ impl Store {
             ),
         };
         sqlx::query(sql)
-            .bind(status.as_str())
+            .bind(status)
             .bind(reason)
             .bind(id)
             .execute(self.pool())

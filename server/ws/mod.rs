@@ -1,5 +1,4 @@
-//! The trainer's websocket: `protocol` (the typed messages, parsed once) and `socket` (the
-//! connection: auth, catch-up, relay, answers).
+//! The trainer's websocket (`socket`): auth, catch-up, relay of the session's broadcasts, and
+//! answers handed to the session's owner. Its messages are the types of [`crate::protocol`].
 
-pub mod protocol;
 pub mod socket;

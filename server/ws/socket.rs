@@ -3,22 +3,21 @@
 //! session's broadcasts and take answers. Each message is parsed once (`protocol`); bad input
 //! gets an `error` and the connection stays up.
 
-use std::sync::Arc;
 use std::time::Instant;
 
+use axum::extract::State;
 use axum::extract::ws::rejection::WebSocketUpgradeRejection;
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
-use axum::extract::{Path, Query, State};
-use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
-use serde::Deserialize;
 use tokio::sync::broadcast::error::RecvError;
 
-use super::protocol::{ClientMessage, ProtocolError, ServerMessage, id_of, parse_client};
 use crate::http::AppState;
-use crate::http::auth::same_token;
+use crate::http::auth::SessionAccess;
 use crate::http::error::ApiError;
-use crate::hub::{AnswerReply, Live};
+use crate::hub::{AnswerReply, Joined, SessionHandle};
+use crate::protocol::{
+    ClientMessage, ErrorCode, ProtocolError, QueryKind, ServerMessage, id_of, parse_client,
+};
 use crate::scene_graph::SceneGraph;
 use crate::store::SessionRow;
 
@@ -28,38 +27,15 @@ pub const MAX_MESSAGE_BYTES: usize = 4 * 1024;
 const ANSWER_RATE: f64 = 20.0;
 const ANSWER_BURST: f64 = 40.0;
 
-#[derive(Debug, Deserialize)]
-pub struct WsQuery {
-    token: Option<String>,
-}
-
 pub async fn upgrade(
     State(state): State<AppState>,
-    Path(id): Path<String>,
-    Query(q): Query<WsQuery>,
+    SessionAccess(row): SessionAccess,
     ws: Result<WebSocketUpgrade, WebSocketUpgradeRejection>,
 ) -> Response {
-    let row = match state.store.session(&id).await {
-        Ok(Some(row)) => row,
-        Ok(None) => return ApiError::not_found(format!("no session {id}")).into_response(),
-        Err(e) => return ApiError::from(e).into_response(),
-    };
-    let Some(token) = q.token else {
-        return ApiError::unauthorized("the websocket needs ?token=<the session's trainer token>")
-            .into_response();
-    };
-    if !same_token(&token, &row.trainer_token) && !same_token(&token, &state.token) {
-        return ApiError::new(
-            StatusCode::FORBIDDEN,
-            "forbidden",
-            format!("this token is not valid for session {id}"),
-        )
-        .into_response();
-    }
     let ws = match ws {
         Ok(ws) => ws,
         Err(e) => {
-            return ApiError::bad_request(format!("not a websocket request: {e}")).into_response();
+            return ApiError::BadRequest(format!("not a websocket request: {e}")).into_response();
         }
     };
     ws.max_message_size(MAX_MESSAGE_BYTES)
@@ -71,7 +47,11 @@ fn text(s: &str) -> Message {
     Message::Text(s.to_owned().into())
 }
 
-fn hello(row: &SessionRow, live: Option<&Live>, status: crate::store::Status) -> ServerMessage {
+fn hello(
+    row: &SessionRow,
+    geometry: Option<crate::sim::Geometry>,
+    status: crate::store::Status,
+) -> ServerMessage {
     let spec = row.spec().ok();
     let task = spec.as_ref().map_or(crate::sim::Task::Reaching, |s| s.task);
     let graph = spec
@@ -82,7 +62,7 @@ fn hello(row: &SessionRow, live: Option<&Live>, status: crate::store::Status) ->
         .as_ref()
         .and_then(|s| s.settings().ok())
         .map_or(crate::session::spec::DEFAULT_PACE_HZ, |s| s.pace_hz);
-    let kind = spec.map_or("evaluative", |s| s.method.query_kind());
+    let kind = spec.map_or(QueryKind::Evaluative, |s| s.method.query_kind());
     ServerMessage::Hello {
         session: row.id.clone(),
         task,
@@ -90,7 +70,7 @@ fn hello(row: &SessionRow, live: Option<&Live>, status: crate::store::Status) ->
         kind,
         status,
         predicates: graph.predicates().to_vec(),
-        geometry: live.and_then(|l| l.lock().geometry.clone()),
+        geometry,
         budget: row.budget as u64,
         pace_hz,
     }
@@ -125,42 +105,41 @@ impl RateLimit {
 }
 
 async fn serve(state: AppState, row: SessionRow, mut socket: WebSocket) {
-    let live = state.hub.live(&row.id);
-    let status = state.hub.status_of(&row);
+    let session = state.hub.session(&row.id);
+    let snapshot = session.as_ref().map(SessionHandle::snapshot);
+    let status = snapshot.as_ref().map_or(row.status, |s| s.status);
+    let geometry = snapshot.and_then(|s| s.geometry);
     if socket
-        .send(text(&hello(&row, live.as_deref(), status).to_text()))
+        .send(text(&hello(&row, geometry, status).to_text()))
         .await
         .is_err()
     {
         return;
     }
-    let Some(live) = live.filter(|_| status.is_active()) else {
+    // Joined atomically: the catch-up, then every broadcast after it, nothing between.
+    let joined = match &session {
+        Some(s) if status.is_active() => s.join().await.map(|j| (s, j)),
+        _ => None,
+    };
+    let Some((
+        session,
+        Joined {
+            catch_up,
+            broadcast: mut rx,
+        },
+    )) = joined
+    else {
         // Nothing runs: say so, and refuse answers until the browser goes.
         let ended = ServerMessage::Ended {
-            status,
+            status: state.hub.status_of(&row),
             reason: row.reason.clone(),
         };
         if socket.send(text(&ended.to_text())).await.is_err() {
             return;
         }
-        while let Some(Ok(m)) = socket.recv().await {
-            let reply = match m {
-                Message::Text(t) => match parse_client(t.as_str()) {
-                    Ok(_) => session_ended(id_of(t.as_str())),
-                    Err(e) => e.to_message(id_of(t.as_str())),
-                },
-                Message::Close(_) => return,
-                _ => continue,
-            };
-            if socket.send(text(&reply.to_text())).await.is_err() {
-                return;
-            }
-        }
-        return;
+        return refuse_until_closed(socket).await;
     };
-    // Subscribe before catching up, so nothing falls between; the browser drops duplicates by id.
-    let mut rx = live.subscribe();
-    for m in live.catch_up() {
+    for m in catch_up {
         if socket.send(text(&m)).await.is_err() {
             return;
         }
@@ -174,20 +153,24 @@ async fn serve(state: AppState, row: SessionRow, mut socket: WebSocket) {
                         return;
                     }
                 }
-                // Too slow for the frame rate: skip ahead, and re-send what must not be missed.
+                // Too slow for the frame rate: join again, which re-sends what must not be
+                // missed.
                 Err(RecvError::Lagged(_)) => {
-                    for m in live.catch_up() {
+                    let Some(again) = session.join().await else { return };
+                    rx = again.broadcast;
+                    for m in again.catch_up {
                         if socket.send(text(&m)).await.is_err() {
                             return;
                         }
                     }
                 }
-                Err(RecvError::Closed) => return,
+                // The session ended (its `ended` came last): answers are closed from here.
+                Err(RecvError::Closed) => return refuse_until_closed(socket).await,
             },
             incoming = socket.recv() => {
                 let reply = match incoming {
-                    Some(Ok(Message::Text(t))) => handle(&state, &live, &mut limit, t.as_str()).await,
-                    Some(Ok(Message::Binary(_))) => Some(ProtocolError::new("bad_message", "binary messages are not part of the protocol; send JSON text").to_message(None)),
+                    Some(Ok(Message::Text(t))) => handle(session, &mut limit, t.as_str()).await,
+                    Some(Ok(Message::Binary(_))) => Some(ProtocolError::new(ErrorCode::BadMessage, "binary messages are not part of the protocol; send JSON text").to_message(None)),
                     Some(Ok(_)) => None, // ping / pong (answered by axum)
                     // Closed, or a protocol violation such as an oversized message.
                     Some(Err(_)) | None => return,
@@ -202,20 +185,32 @@ async fn serve(state: AppState, row: SessionRow, mut socket: WebSocket) {
     }
 }
 
+/// Nothing runs: refuse answers until the browser goes.
+async fn refuse_until_closed(mut socket: WebSocket) {
+    while let Some(Ok(m)) = socket.recv().await {
+        let reply = match m {
+            Message::Text(t) => match parse_client(t.as_str()) {
+                Ok(_) => session_ended(id_of(t.as_str())),
+                Err(e) => e.to_message(id_of(t.as_str())),
+            },
+            Message::Close(_) => return,
+            _ => continue,
+        };
+        if socket.send(text(&reply.to_text())).await.is_err() {
+            return;
+        }
+    }
+}
+
 fn session_ended(id: Option<i64>) -> ServerMessage {
     ProtocolError::new(
-        "session_ended",
+        ErrorCode::SessionEnded,
         "the session is not running; answers are closed",
     )
     .to_message(id)
 }
 
-async fn handle(
-    state: &AppState,
-    live: &Arc<Live>,
-    limit: &mut RateLimit,
-    t: &str,
-) -> Option<ServerMessage> {
+async fn handle(session: &SessionHandle, limit: &mut RateLimit, t: &str) -> Option<ServerMessage> {
     let message = match parse_client(t) {
         Ok(m) => m,
         Err(e) => return Some(e.to_message(id_of(t))),
@@ -226,26 +221,19 @@ async fn handle(
         };
         return Some(
             ProtocolError::new(
-                "rate_limited",
+                ErrorCode::RateLimited,
                 format!("more than {ANSWER_RATE} messages a second; slow down"),
             )
             .to_message(Some(id)),
         );
     }
     match message {
-        ClientMessage::Answer { id, value } => {
-            if !live.lock().status.is_active() {
-                return Some(session_ended(Some(id)));
-            }
-            Some(
-                match live.answer(&state.store, id, value, "trainer").await {
-                    AnswerReply::Ack(value) => ServerMessage::Ack { id, value },
-                    AnswerReply::Refused(e) => e.to_message(Some(id)),
-                },
-            )
-        }
+        ClientMessage::Answer { id, value } => Some(match session.answer(id, value).await {
+            AnswerReply::Ack(value) => ServerMessage::Ack { id, value },
+            AnswerReply::Refused(e) => e.to_message(Some(id)),
+        }),
         // On success every page gets `undone` and the query again, by broadcast.
-        ClientMessage::Undo { id } => match live.undo(&state.store, id).await {
+        ClientMessage::Undo { id } => match session.undo(id).await {
             Ok(()) => None,
             Err(e) => Some(e.to_message(Some(id))),
         },

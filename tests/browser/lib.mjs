@@ -14,7 +14,7 @@ mkdirSync(ARTIFACTS, { recursive: true });
 function need(name) {
   const v = process.env[name];
   if (!v) {
-    console.error(`${name} is not set: run these scripts through \`cargo test --test browser\``);
+    console.error(`${name} is not set: run these scripts through \`cargo test --test suite browser::\``);
     process.exit(2);
   }
   return v;

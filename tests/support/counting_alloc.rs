@@ -1,5 +1,5 @@
-//! A counting global allocator for the no-allocation tests. Each test binary that uses it
-//! installs it with `#[global_allocator]`, so no other test shares its counters.
+//! A counting global allocator for the no-allocation tests, installed for the whole suite by
+//! `tests/main.rs`. Its counters are per thread, so a test counts only its own allocations.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;

@@ -1,10 +1,7 @@
 //! A server for tests: the router over a fresh data dir (for `oneshot`), or the whole server
 //! started in-process on port 0 (for websocket clients).
 
-#![allow(dead_code)]
-
 use std::sync::Arc;
-use std::time::{Duration, Instant};
 
 use dualrep::cli::serve::{Running, ServeArgs, start};
 use dualrep::http::AppState;
@@ -98,26 +95,5 @@ impl Api {
             .unwrap();
         let status = r.status().as_u16();
         (status, r.json().await.unwrap_or(Value::Null))
-    }
-
-    /// Poll a session until `done(session)` or panic after `timeout`.
-    pub async fn wait_for(
-        &self,
-        id: &str,
-        timeout: Duration,
-        done: impl Fn(&Value) -> bool,
-    ) -> Value {
-        let start = Instant::now();
-        loop {
-            let s = self.get(&format!("/api/sessions/{id}")).await;
-            if done(&s) {
-                return s;
-            }
-            assert!(
-                start.elapsed() < timeout,
-                "session {id} did not get there in {timeout:?}: {s}"
-            );
-            tokio::time::sleep(Duration::from_millis(50)).await;
-        }
     }
 }

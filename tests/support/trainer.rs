@@ -1,7 +1,5 @@
 //! A websocket trainer for tests: connect with a token, read typed-ish JSON, answer.
 
-#![allow(dead_code)]
-
 use std::time::Duration;
 
 use futures_util::{SinkExt, StreamExt};

@@ -1,11 +1,14 @@
-//! The websocket protocol (`docs/protocol.md`): one serde-tagged enum each way. Client text is
-//! parsed once, here, into `ClientMessage`; anything else becomes a `ProtocolError` with a code
-//! the browser can act on. No IO.
+//! The websocket protocol (`docs/protocol.md`), below both the hub and the socket: one
+//! serde-tagged enum each way, and the closed sets of values on the wire (query kinds, who
+//! answered, why a query was withdrawn, error codes) as enums. Client text is parsed once,
+//! here, into `ClientMessage`; anything else becomes a `ProtocolError` with a code the browser
+//! can act on. No IO.
 
 use serde::{Deserialize, Serialize};
 
 use crate::scene_graph::Predicate;
-use crate::session::{AnswerValue, Frame, QueryContent};
+pub use crate::session::{AnswerValue, Answerer, QueryKind};
+use crate::session::{Frame, QueryContent};
 use crate::sim::{Geometry, Task};
 use crate::store::Status;
 
@@ -18,8 +21,8 @@ pub enum ServerMessage {
         session: String,
         task: Task,
         method: String,
-        /// `evaluative` or `preference`: which answers this session takes.
-        kind: &'static str,
+        /// Which answers this session takes.
+        kind: QueryKind,
         status: Status,
         predicates: Vec<Predicate>,
         /// The current episode's static scene (absent until the session has started).
@@ -43,14 +46,14 @@ pub enum ServerMessage {
     Undone {
         id: i64,
     },
-    /// `id` needs no answer any more: `answered` (by another trainer), `expired`, or `ended`.
+    /// `id` needs no answer any more.
     Withdrawn {
         id: i64,
-        reason: &'static str,
+        reason: WithdrawReason,
     },
     Progress(ProgressMessage),
     Error {
-        code: &'static str,
+        code: ErrorCode,
         message: String,
         #[serde(skip_serializing_if = "Option::is_none")]
         id: Option<i64>,
@@ -105,15 +108,53 @@ pub enum ClientMessage {
     Undo { id: i64 },
 }
 
+/// Why a query needs no answer any more.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WithdrawReason {
+    /// Answered (by this trainer or another).
+    Answered,
+    /// Its answer timeout passed: it counts as "no feedback" (a skipped pair).
+    Expired,
+    /// The session ended while it was open.
+    Ended,
+}
+
+/// What went wrong with a client's message, for the browser to act on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ErrorCode {
+    /// Not JSON.
+    MalformedJson,
+    /// JSON, but not a message of the protocol.
+    BadMessage,
+    /// A value of the wrong kind for the query (a preference for an evaluative query, say).
+    BadValue,
+    /// Answered before with another value; the first answer stands.
+    AlreadyAnswered,
+    /// Asked, but no longer open (its session ended while it waited).
+    Expired,
+    /// Not a query of this session.
+    UnknownQuery,
+    /// The database failed; nothing was stored, try again.
+    StoreFailed,
+    /// Not the latest answer a trainer gave, too old, or the session is not running.
+    UndoUnavailable,
+    /// Too many messages a second.
+    RateLimited,
+    /// The session is not running; answers are closed.
+    SessionEnded,
+}
+
 /// Why a client message was refused.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ProtocolError {
-    pub code: &'static str,
+    pub code: ErrorCode,
     pub message: String,
 }
 
 impl ProtocolError {
-    pub fn new(code: &'static str, message: impl Into<String>) -> Self {
+    pub fn new(code: ErrorCode, message: impl Into<String>) -> Self {
         Self {
             code,
             message: message.into(),
@@ -132,16 +173,16 @@ impl ProtocolError {
 /// Parse one text message from a trainer.
 pub fn parse_client(text: &str) -> Result<ClientMessage, ProtocolError> {
     let value: serde_json::Value = serde_json::from_str(text)
-        .map_err(|e| ProtocolError::new("malformed_json", format!("not JSON: {e}")))?;
+        .map_err(|e| ProtocolError::new(ErrorCode::MalformedJson, format!("not JSON: {e}")))?;
     if !value.is_object() {
         return Err(ProtocolError::new(
-            "bad_message",
+            ErrorCode::BadMessage,
             "a message is a JSON object with a \"type\"",
         ));
     }
     serde_json::from_value(value).map_err(|e| {
         ProtocolError::new(
-            "bad_message",
+            ErrorCode::BadMessage,
             format!(
                 "{e}; expected {{\"type\": \"answer\", \"id\": <query id>, \"value\": 1 | 0 | -1 | \"left\" | \"right\" | \"equal\" | \"skip\"}} or {{\"type\": \"undo\", \"id\": <query id>}}"
             ),
@@ -193,29 +234,32 @@ mod tests {
 
     #[test]
     fn bad_messages_get_codes() {
-        assert_eq!(parse_client("{").unwrap_err().code, "malformed_json");
-        assert_eq!(parse_client("[1]").unwrap_err().code, "bad_message");
+        assert_eq!(
+            parse_client("{").unwrap_err().code,
+            ErrorCode::MalformedJson
+        );
+        assert_eq!(parse_client("[1]").unwrap_err().code, ErrorCode::BadMessage);
         assert_eq!(
             parse_client(r#"{"type":"answer","id":"x","value":1}"#)
                 .unwrap_err()
                 .code,
-            "bad_message"
+            ErrorCode::BadMessage
         );
         assert_eq!(
             parse_client(r#"{"type":"answer","id":1,"value":"maybe"}"#)
                 .unwrap_err()
                 .code,
-            "bad_message"
+            ErrorCode::BadMessage
         );
         assert_eq!(
             parse_client(r#"{"type":"hack","id":1}"#).unwrap_err().code,
-            "bad_message"
+            ErrorCode::BadMessage
         );
         assert_eq!(
             parse_client(r#"{"type":"answer","id":1,"value":1,"x":2}"#)
                 .unwrap_err()
                 .code,
-            "bad_message"
+            ErrorCode::BadMessage
         );
         assert_eq!(
             id_of(r#"{"type":"answer","id":12,"value":"maybe"}"#),
@@ -227,7 +271,7 @@ mod tests {
     fn server_messages_are_tagged_snake_case() {
         let m = ServerMessage::Withdrawn {
             id: 4,
-            reason: "answered",
+            reason: WithdrawReason::Answered,
         };
         assert_eq!(
             m.to_text(),
@@ -259,7 +303,7 @@ mod tests {
             match parse_client(&text) {
                 Ok(ClientMessage::Answer { value, .. }) => prop_assert!(ty == "answer" && (value.as_evaluation().is_some() || value.as_preference().is_some() || matches!(value, AnswerValue::Evaluation(_)))),
                 Ok(ClientMessage::Undo { .. }) => prop_assert!(false, "undo takes no value"),
-                Err(e) => prop_assert!(e.code == "bad_message"),
+                Err(e) => prop_assert!(e.code == ErrorCode::BadMessage),
             }
         }
     }

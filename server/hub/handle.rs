@@ -1,0 +1,123 @@
+//! How the rest of the server reaches a session: a [`SessionHandle`] sends [`Command`]s to the
+//! session's owner task and reads the [`Snapshot`] the owner publishes. Nothing outside the
+//! owner changes a session's live state.
+
+use std::sync::Arc;
+
+use tokio::sync::{broadcast, mpsc, oneshot, watch};
+
+use crate::protocol::{ErrorCode, ProgressMessage, ProtocolError};
+use crate::session::AnswerValue;
+use crate::sim::Geometry;
+use crate::store::Status;
+
+/// Commands a session's owner takes, each answered on its own channel.
+#[derive(Debug)]
+pub(super) enum Command {
+    /// A browser joins: what it needs to catch up, and the broadcast from then on.
+    Join(oneshot::Sender<Joined>),
+    /// A trainer's answer to query `id`.
+    Answer {
+        id: i64,
+        value: AnswerValue,
+        reply: oneshot::Sender<AnswerReply>,
+    },
+    /// A trainer takes back the answer to query `id`.
+    Undo {
+        id: i64,
+        reply: oneshot::Sender<Result<(), ProtocolError>>,
+    },
+    /// A researcher stops the session (queued or running).
+    Stop(oneshot::Sender<()>),
+    /// The server shuts down: checkpoint and end as interrupted.
+    Shutdown,
+}
+
+/// What a joining browser gets: the messages that bring it up to date (progress, the open
+/// queries, the end if it came), then everything broadcast after them, with nothing between.
+#[derive(Debug)]
+pub struct Joined {
+    pub catch_up: Vec<Arc<str>>,
+    pub broadcast: broadcast::Receiver<Arc<str>>,
+}
+
+/// What a trainer's answer got.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AnswerReply {
+    Ack(AnswerValue),
+    Refused(ProtocolError),
+}
+
+/// The session's state as the owner last published it, for HTTP views and `hello`.
+#[derive(Clone, Debug)]
+pub struct Snapshot {
+    pub status: Status,
+    pub reason: Option<String>,
+    pub progress: ProgressMessage,
+    pub geometry: Option<Geometry>,
+}
+
+/// A live session, as the HTTP routes and sockets hold it. Cheap to clone.
+#[derive(Clone, Debug)]
+pub struct SessionHandle {
+    pub id: Arc<str>,
+    pub(super) commands: mpsc::UnboundedSender<Command>,
+    pub(super) snapshot: watch::Receiver<Snapshot>,
+}
+
+/// The refusal when the owner has gone (the session ended while the command was on its way).
+fn ended() -> ProtocolError {
+    ProtocolError::new(
+        ErrorCode::SessionEnded,
+        "the session is not running; answers are closed",
+    )
+}
+
+impl SessionHandle {
+    pub fn snapshot(&self) -> Snapshot {
+        self.snapshot.borrow().clone()
+    }
+
+    pub fn status(&self) -> Status {
+        self.snapshot.borrow().status
+    }
+
+    /// Join the session's broadcast (`None`: the session has ended).
+    pub async fn join(&self) -> Option<Joined> {
+        let (reply, answer) = oneshot::channel();
+        self.commands.send(Command::Join(reply)).ok()?;
+        answer.await.ok()
+    }
+
+    /// Answer query `id`; the reply comes after the answer is committed (or refused).
+    pub async fn answer(&self, id: i64, value: AnswerValue) -> AnswerReply {
+        let (reply, answer) = oneshot::channel();
+        if self
+            .commands
+            .send(Command::Answer { id, value, reply })
+            .is_err()
+        {
+            return AnswerReply::Refused(ended());
+        }
+        answer.await.unwrap_or(AnswerReply::Refused(ended()))
+    }
+
+    /// Take back the answer to query `id`.
+    pub async fn undo(&self, id: i64) -> Result<(), ProtocolError> {
+        let (reply, answer) = oneshot::channel();
+        self.commands
+            .send(Command::Undo { id, reply })
+            .map_err(|_| ended())?;
+        answer.await.map_err(|_| ended())?
+    }
+
+    /// Ask the owner to stop the session; `false` if it had already gone.
+    pub(super) async fn stop(&self) -> bool {
+        let (reply, answer) = oneshot::channel();
+        self.commands.send(Command::Stop(reply)).is_ok() && answer.await.is_ok()
+    }
+
+    pub(super) fn shutdown(&self) {
+        let _ = self.commands.send(Command::Shutdown);
+    }
+}

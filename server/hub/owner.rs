@@ -1,0 +1,386 @@
+//! A session's owner: one tokio task per session that alone holds its live state. It waits for
+//! a slot while queued, starts the session thread, and then takes, in one `select!`, the
+//! thread's events, the commands of sockets and routes (answers, undos, joins, stop) and the
+//! answer deadlines. Status changes go through [`Owner::set_status`], which writes the database
+//! and the published snapshot together.
+
+use std::collections::VecDeque;
+use std::sync::Arc;
+use std::sync::mpsc::Sender;
+use std::time::Duration;
+
+use tokio::sync::mpsc::{UnboundedReceiver, UnboundedSender};
+use tokio::sync::{broadcast, watch};
+use tokio::time::Instant;
+
+use super::Hub;
+use super::answers::Undoable;
+use super::episode_frames::EpisodeFrames;
+use super::handle::{Command, Joined, SessionHandle, Snapshot};
+use crate::protocol::{ProgressMessage, QueryKind, ServerMessage, WithdrawReason};
+use crate::session::{AnswerValue, Control, Ending, SessionEvent, SessionSpec};
+use crate::sim::Geometry;
+use crate::store::{Status, Store, SyntheticAnswer};
+
+/// Messages kept for a browser that falls behind before it must catch up again.
+const BROADCAST_CAPACITY: usize = 256;
+/// Returns kept for the trainer's live curve.
+const RECENT_RETURNS: usize = 50;
+/// Answers kept in memory after their query closed, so repeats need no database read.
+const RECENT_ANSWERS: usize = 256;
+
+/// A query open for answers.
+#[derive(Clone, Debug)]
+pub(super) struct Open {
+    pub id: i64,
+    pub seq: u64,
+    /// The query message, serialised once for every browser.
+    pub text: Arc<str>,
+    pub asked: Instant,
+    pub deadline: Instant,
+}
+
+impl Open {
+    pub fn new(id: i64, seq: u64, text: Arc<str>, timeout: Duration) -> Self {
+        let asked = Instant::now();
+        Self {
+            id,
+            seq,
+            text,
+            asked,
+            deadline: asked + timeout,
+        }
+    }
+}
+
+pub(super) struct Owner {
+    pub hub: Arc<Hub>,
+    /// The handle's id: the hub's map forgets a session only under the owner that put it there.
+    key: Arc<str>,
+    pub store: Store,
+    pub id: String,
+    pub spec: SessionSpec,
+    pub kind: QueryKind,
+    pub answer_timeout: Duration,
+    pub status: Status,
+    pub reason: Option<String>,
+    pub progress: ProgressMessage,
+    pub geometry: Option<Geometry>,
+    /// The query the session thread waits on.
+    pub pending: Option<Open>,
+    /// A query open again after an undo (the session may meanwhile wait on `pending`).
+    pub reopened: Option<Open>,
+    /// The latest committed answers, newest last.
+    pub recent: VecDeque<(i64, AnswerValue)>,
+    /// The latest answer a trainer gave (not a timeout's), until undone or too old.
+    pub undoable: Option<Undoable>,
+    /// The session thread's controls, while it runs.
+    pub control: Option<Sender<Control>>,
+    broadcast: broadcast::Sender<Arc<str>>,
+    snapshot: watch::Sender<Snapshot>,
+    /// Synthetic answers waiting to be stored in one transaction.
+    pub batch: Vec<SyntheticAnswer>,
+    pub stored_progress_at: std::time::Instant,
+    /// The running episode's frames, written to the data dir when it ends (for replay).
+    pub episode_frames: EpisodeFrames,
+    pub ending: Ending,
+}
+
+impl Owner {
+    /// A queued session's owner and the handle to reach it.
+    pub fn new(
+        hub: Arc<Hub>,
+        id: String,
+        spec: SessionSpec,
+        answer_timeout: Duration,
+    ) -> (Self, SessionHandle, UnboundedReceiver<Command>) {
+        let progress = ProgressMessage {
+            budget: spec.budget,
+            unit: spec.method.budget_unit(),
+            ..Default::default()
+        };
+        let (snapshot, snapshot_rx) = watch::channel(Snapshot {
+            status: Status::Queued,
+            reason: None,
+            progress: progress.clone(),
+            geometry: None,
+        });
+        let (commands, commands_rx): (UnboundedSender<Command>, _) =
+            tokio::sync::mpsc::unbounded_channel();
+        let (broadcast, _) = broadcast::channel(BROADCAST_CAPACITY);
+        let handle = SessionHandle {
+            id: id.as_str().into(),
+            commands,
+            snapshot: snapshot_rx,
+        };
+        let owner = Self {
+            key: handle.id.clone(),
+            store: hub.store.clone(),
+            hub,
+            kind: spec.method.query_kind(),
+            id,
+            spec,
+            answer_timeout,
+            status: Status::Queued,
+            reason: None,
+            progress,
+            geometry: None,
+            pending: None,
+            reopened: None,
+            recent: VecDeque::new(),
+            undoable: None,
+            control: None,
+            broadcast,
+            snapshot,
+            batch: Vec::new(),
+            stored_progress_at: std::time::Instant::now(),
+            episode_frames: EpisodeFrames::default(),
+            ending: Ending::Failed("the session thread ended without a word".into()),
+        };
+        (owner, handle, commands_rx)
+    }
+
+    /// The session's whole life: queued, running, ended.
+    pub async fn run(mut self, mut commands: UnboundedReceiver<Command>) {
+        let slots = self.hub.slots.clone();
+        let _slot = loop {
+            tokio::select! {
+                slot = slots.clone().acquire_owned() => match slot {
+                    Ok(slot) => break slot,
+                    // The hub shuts down: the session stays queued for the next start.
+                    Err(_) => return self.forget(),
+                },
+                command = commands.recv() => match command {
+                    Some(Command::Stop(reply)) => {
+                        self.set_status(Status::Stopped, Some("stopped while queued".into())).await;
+                        let _ = reply.send(());
+                        return self.forget();
+                    }
+                    Some(command) => self.command(command).await,
+                    None => return,
+                },
+            }
+        };
+        match self.start_thread().await {
+            Ok(events) => self.serve(events, commands).await,
+            Err(reason) => {
+                tracing::error!(session = %self.id, "{reason}");
+                self.set_status(Status::Failed, Some(reason)).await;
+                self.broadcast_ended();
+                self.forget();
+            }
+        }
+    }
+
+    /// While the session thread runs: its events, the commands and the answer deadlines, in
+    /// one loop, until the thread's channel closes; then the end is stored.
+    pub async fn serve(
+        mut self,
+        mut events: UnboundedReceiver<SessionEvent>,
+        mut commands: UnboundedReceiver<Command>,
+    ) {
+        loop {
+            let deadline = self.next_deadline();
+            tokio::select! {
+                event = events.recv() => match event {
+                    Some(event) => self.apply(event, events.is_empty()).await,
+                    None => break,
+                },
+                Some(command) = commands.recv() => self.command(command).await,
+                () = sleep_until(deadline), if deadline.is_some() => self.expire_due().await,
+            }
+        }
+        self.finish().await;
+    }
+
+    async fn command(&mut self, command: Command) {
+        match command {
+            Command::Join(reply) => {
+                let _ = reply.send(self.join());
+            }
+            Command::Answer { id, value, reply } => {
+                let (answer, delivery) = self.answer(id, value).await;
+                // Acknowledged once committed; the session and the other browsers hear after.
+                let _ = reply.send(answer);
+                if let Some(delivery) = delivery {
+                    self.deliver(delivery).await;
+                }
+            }
+            Command::Undo { id, reply } => {
+                let _ = reply.send(self.undo(id).await);
+            }
+            Command::Stop(reply) => {
+                if let Some(control) = &self.control {
+                    let _ = control.send(Control::Stop);
+                }
+                let _ = reply.send(());
+            }
+            Command::Shutdown => {
+                if let Some(control) = &self.control {
+                    let _ = control.send(Control::Shutdown);
+                }
+            }
+        }
+    }
+
+    /// The one place a status changes: in the database, then in the published snapshot.
+    pub async fn set_status(&mut self, status: Status, reason: Option<String>) {
+        if let Err(e) = self
+            .store
+            .set_status(&self.id, status, reason.as_deref())
+            .await
+        {
+            tracing::error!(session = %self.id, "storing status {}: {e}", status.as_str());
+        }
+        self.status = status;
+        self.reason = reason;
+        self.publish();
+    }
+
+    /// Publish the state HTTP views and joining sockets read.
+    pub fn publish(&self) {
+        self.snapshot.send_replace(Snapshot {
+            status: self.status,
+            reason: self.reason.clone(),
+            progress: self.progress.clone(),
+            geometry: self.geometry.clone(),
+        });
+    }
+
+    /// Send to every connected browser (none connected is fine).
+    pub fn broadcast(&self, text: Arc<str>) {
+        let _ = self.broadcast.send(text);
+    }
+
+    pub fn broadcast_message(&self, m: &ServerMessage) {
+        self.broadcast(m.to_text().into());
+    }
+
+    pub fn broadcast_progress(&self) {
+        self.broadcast_message(&ServerMessage::Progress(self.progress.clone()));
+    }
+
+    fn broadcast_ended(&self) {
+        self.broadcast_message(&ServerMessage::Ended {
+            status: self.status,
+            reason: self.reason.clone(),
+        });
+    }
+
+    /// What a joining browser gets after `hello`: the progress, the open queries (with their
+    /// time left), and the end if it came.
+    fn join(&self) -> Joined {
+        let broadcast = self.broadcast.subscribe();
+        let mut catch_up: Vec<Arc<str>> = vec![
+            ServerMessage::Progress(self.progress.clone())
+                .to_text()
+                .into(),
+        ];
+        if let Some(p) = &self.pending {
+            catch_up.push(p.text.clone());
+        }
+        // Last, so that a page showing one query at a time shows the one the trainer reopened.
+        if let Some(p) = &self.reopened {
+            catch_up.push(p.text.clone());
+        }
+        if !self.status.is_active() {
+            catch_up.push(
+                ServerMessage::Ended {
+                    status: self.status,
+                    reason: self.reason.clone(),
+                }
+                .to_text()
+                .into(),
+            );
+        }
+        Joined {
+            catch_up,
+            broadcast,
+        }
+    }
+
+    pub fn push_return(&mut self, r: f64) {
+        let returns = &mut self.progress.recent_returns;
+        returns.push(r);
+        if returns.len() > RECENT_RETURNS {
+            returns.remove(0);
+        }
+    }
+
+    /// A committed answer to query `open`: counted, kept for repeats, and undoable if a
+    /// trainer gave it.
+    pub fn remember(&mut self, open: &Open, value: AnswerValue, reason: WithdrawReason) {
+        self.progress.answered += 1;
+        if self.recent.len() == RECENT_ANSWERS {
+            self.recent.pop_front();
+        }
+        self.recent.push_back((open.id, value));
+        if reason == WithdrawReason::Answered {
+            self.undoable = Some(Undoable {
+                query: open.clone(),
+                at: Instant::now(),
+            });
+        }
+    }
+
+    /// The session thread is done: store the final state and tell the browsers.
+    async fn finish(&mut self) {
+        if let Err(e) = self.flush().await {
+            tracing::error!(session = %self.id, "storing synthetic answers failed: {e}");
+        }
+        let (status, reason) = match std::mem::replace(&mut self.ending, Ending::Finished) {
+            Ending::Finished => (Status::Finished, None),
+            Ending::Stopped => (Status::Stopped, None),
+            Ending::Interrupted => (
+                Status::Interrupted,
+                Some("the server shut down".to_string()),
+            ),
+            Ending::Failed(r) => (Status::Failed, Some(r)),
+        };
+        self.control = None;
+        self.undoable = None;
+        // A reopened query stays undone: its answer stands as "no feedback" (or a skip).
+        let open = [self.pending.take(), self.reopened.take()];
+        let latest = serde_json::to_value(&self.progress).unwrap_or_default();
+        if let Err(e) = self
+            .store
+            .set_progress(&self.id, self.progress.progress, &latest)
+            .await
+        {
+            tracing::error!(session = %self.id, "storing progress: {e}");
+        }
+        self.set_status(status, reason).await;
+        for p in open.into_iter().flatten() {
+            self.broadcast_message(&ServerMessage::Withdrawn {
+                id: p.id,
+                reason: WithdrawReason::Ended,
+            });
+        }
+        self.broadcast_progress();
+        self.broadcast_ended();
+        tracing::info!(session = %self.id, status = status.as_str(), "session ended");
+        self.forget();
+    }
+
+    /// From here the store has the final state: the hub lets go of the session (connected
+    /// sockets see their commands refused and the broadcast close).
+    fn forget(&self) {
+        self.hub.forget(&self.key);
+    }
+
+    /// The earliest answer deadline of the open queries.
+    fn next_deadline(&self) -> Option<Instant> {
+        [&self.pending, &self.reopened]
+            .into_iter()
+            .flatten()
+            .map(|p| p.deadline)
+            .min()
+    }
+}
+
+async fn sleep_until(deadline: Option<Instant>) {
+    match deadline {
+        Some(d) => tokio::time::sleep_until(d).await,
+        None => std::future::pending().await,
+    }
+}

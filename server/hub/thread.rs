@@ -1,0 +1,85 @@
+//! Starting a session's thread: its stored answers and revisions to replay, the checkpoint to
+//! verify against, its recording, and the thread itself (the training loop never runs on the
+//! async runtime).
+
+use std::sync::Arc;
+
+use tokio::sync::mpsc::UnboundedReceiver;
+
+use super::owner::Owner;
+use super::{recording, sink};
+use crate::record::RecordingOptions;
+use crate::session::{Controls, Ending, SessionContext, SessionEvent, run_session};
+
+impl Owner {
+    /// Start the session thread; its events arrive on the returned channel, which closes when
+    /// the thread has ended. `Err`: why it could not start.
+    pub(super) async fn start_thread(&mut self) -> Result<UnboundedReceiver<SessionEvent>, String> {
+        let id = self.id.clone();
+        let (stored_answers, stored_revisions, checkpoint) = match (
+            self.store.replay_answers(&id).await,
+            self.store.replay_revisions(&id).await,
+            self.store.latest_checkpoint(&id).await,
+        ) {
+            (Ok(a), Ok(r), Ok(c)) => (a, r, c),
+            (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => {
+                return Err(format!("reading the session's answers: {e}"));
+            }
+        };
+        // A checkpoint is checked only if the replay reaches it with stored answers alone.
+        let verify = checkpoint
+            .filter(|c| c.answers as usize <= stored_answers.len())
+            .map(|c| (c.progress as u64, c.digest));
+        let settings = self.spec.settings()?;
+        let options = RecordingOptions {
+            path: settings.record.then(|| self.hub.recording_path(&id)),
+            connect: settings
+                .rerun_connect
+                .or_else(|| self.hub.config.rerun_connect.clone()),
+        };
+        let graph = self.spec.scene_graph()?;
+        let (control_tx, control_rx) = std::sync::mpsc::channel();
+        let (event_tx, event_rx) = tokio::sync::mpsc::unbounded_channel();
+        let ctx = SessionContext {
+            sink: Arc::new(sink::ChannelSink(event_tx.clone())),
+            controls: Controls::new(control_rx),
+            stored_answers,
+            stored_revisions,
+            verify,
+            models_dir: self.hub.config.models_dir.clone(),
+            observer: None,
+        };
+        let spec = self.spec.clone();
+        let mut builder = std::thread::Builder::new().name(format!("session-{id}"));
+        if let Some(bytes) = self.hub.config.session_stack_size {
+            builder = builder.stack_size(bytes);
+        }
+        let failed = move |reason: String| {
+            let _ = event_tx.send(SessionEvent::Ended(Ending::Failed(reason)));
+        };
+        builder
+            .spawn(move || {
+                let mut ctx = ctx;
+                // Opening the file (and a viewer connection) is blocking IO: here, not on the
+                // async runtime.
+                match recording::start(&id, graph, &options) {
+                    Ok(observer) => ctx.observer = observer,
+                    Err(e) => return failed(format!("the recording could not start: {e:#}")),
+                }
+                let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    run_session(&spec, ctx)
+                }));
+                if let Err(panic) = result {
+                    let what = panic
+                        .downcast_ref::<String>()
+                        .cloned()
+                        .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                        .unwrap_or_else(|| "unknown".into());
+                    failed(format!("the session panicked: {what}"));
+                }
+            })
+            .map_err(|e| format!("the session's thread could not start: {e}"))?;
+        self.control = Some(control_tx);
+        Ok(event_rx)
+    }
+}

@@ -1,0 +1,33 @@
+//! Every integration test in one binary. Each test binary links the whole Rerun SDK (hundreds
+//! of megabytes and most of a test build's link time), so the suite links it once. The
+//! no-allocation tests share the binary: the counting allocator below keeps its counters per
+//! thread, so the tests running beside them do not disturb their counts.
+//!
+//! Select a group by its module name: `cargo test --test suite browser::`.
+
+mod report_fixtures;
+mod support;
+
+#[global_allocator]
+static GLOBAL: support::counting_alloc::Counting = support::counting_alloc::Counting;
+
+mod belief_no_alloc;
+mod browser;
+mod cli;
+mod durability;
+mod env_contract;
+mod http_api;
+mod lunar_lander;
+mod prefs_e2e;
+mod recording;
+mod report;
+mod reproduce;
+mod rl_gradients;
+mod rl_no_alloc;
+mod sac;
+mod sac_no_alloc;
+mod session_recording;
+mod store;
+mod tabletop;
+mod train_e2e;
+mod ws_sessions;

@@ -1,0 +1,8 @@
+//! Helpers shared by the integration tests.
+
+pub mod binary;
+pub mod cli;
+pub mod counting_alloc;
+pub mod rerun_py;
+pub mod server;
+pub mod trainer;
