@@ -35,7 +35,8 @@ pub enum ServerMessage {
         pace_hz: f64,
     },
     Frame(Frame),
-    Query(QueryMessage),
+    /// Boxed: a query (with its clips) is far larger than the other messages.
+    Query(Box<QueryMessage>),
     /// The answer to `id` is stored.
     Ack {
         id: i64,

@@ -22,10 +22,10 @@ impl Owner {
         if let Err(e) = self.apply_event(event).await {
             tracing::error!(session = %self.id, "storing a session event failed: {e}");
         }
-        if self.batch.len() >= BATCH || (drained && !self.batch.is_empty()) {
-            if let Err(e) = self.flush().await {
-                tracing::error!(session = %self.id, "storing synthetic answers failed: {e}");
-            }
+        if (self.batch.len() >= BATCH || (drained && !self.batch.is_empty()))
+            && let Err(e) = self.flush().await
+        {
+            tracing::error!(session = %self.id, "storing synthetic answers failed: {e}");
         }
     }
 
@@ -55,14 +55,14 @@ impl Owner {
                     .upsert_query(&self.id, seq, self.kind, step, abstract_state, &payload)
                     .await?;
                 let timeout = self.answer_timeout;
-                let text: Arc<str> = ServerMessage::Query(QueryMessage {
+                let text: Arc<str> = ServerMessage::Query(Box::new(QueryMessage {
                     id: query_id,
                     seq,
                     step,
                     abstract_state,
                     expires_in_ms: timeout.as_millis() as u64,
                     content: *content,
-                })
+                }))
                 .to_text()
                 .into();
                 self.pending = Some(Open::new(query_id, seq, text.clone(), timeout));
