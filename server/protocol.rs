@@ -121,6 +121,16 @@ pub enum WithdrawReason {
     Ended,
 }
 
+impl WithdrawReason {
+    /// Why a query closes when `who` answers it.
+    pub fn answered_by(who: Answerer) -> Self {
+        match who {
+            Answerer::Timeout => WithdrawReason::Expired,
+            Answerer::Trainer | Answerer::Synthetic => WithdrawReason::Answered,
+        }
+    }
+}
+
 /// What went wrong with a client's message, for the browser to act on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -160,6 +170,14 @@ impl ProtocolError {
             code,
             message: message.into(),
         }
+    }
+
+    /// The refusal of any answer once the session is not running.
+    pub fn session_ended() -> Self {
+        Self::new(
+            ErrorCode::SessionEnded,
+            "the session is not running; answers are closed",
+        )
     }
 
     pub fn to_message(&self, id: Option<i64>) -> ServerMessage {

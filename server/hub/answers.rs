@@ -75,13 +75,7 @@ impl Owner {
         value: AnswerValue,
     ) -> (AnswerReply, Option<Delivery>) {
         if !self.status.is_active() {
-            return (
-                refuse(
-                    ErrorCode::SessionEnded,
-                    "the session is not running; answers are closed",
-                ),
-                None,
-            );
+            return (AnswerReply::Refused(ProtocolError::session_ended()), None);
         }
         self.commit(id, value, Answerer::Trainer).await
     }
@@ -93,20 +87,17 @@ impl Owner {
         value: AnswerValue,
         who: Answerer,
     ) -> (AnswerReply, Option<Delivery>) {
-        let open = match (&self.pending, &self.reopened) {
-            (_, Some(p)) if p.id == id => p.clone(),
-            (Some(p), _) if p.id == id => p.clone(),
+        let (open, reopened) = match (&self.pending, &self.reopened) {
+            (_, Some(p)) if p.id == id => (p.clone(), true),
+            (Some(p), _) if p.id == id => (p.clone(), false),
             _ => return (self.answer_not_pending(id, value).await, None),
         };
         if !value.fits(self.kind) {
             return (AnswerReply::Refused(bad_value(id, self.kind)), None);
         }
-        let reason = match who {
-            Answerer::Timeout => WithdrawReason::Expired,
-            _ => WithdrawReason::Answered,
-        };
+        let reason = WithdrawReason::answered_by(who);
         let latency_ms = open.asked.elapsed().as_millis() as u64;
-        if self.reopened.as_ref().is_some_and(|p| p.id == id) {
+        if reopened {
             return (self.reanswer(open, value, who, latency_ms).await, None);
         }
         match self
@@ -225,10 +216,7 @@ impl Owner {
                 );
             }
         };
-        let reason = match who {
-            Answerer::Timeout => WithdrawReason::Expired,
-            _ => WithdrawReason::Answered,
-        };
+        let reason = WithdrawReason::answered_by(who);
         self.reopened = None;
         self.remember(&open, value, reason);
         if let Some(control) = &self.control {

@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use tokio::sync::{broadcast, mpsc, oneshot, watch};
 
-use crate::protocol::{ErrorCode, ProgressMessage, ProtocolError};
+use crate::protocol::{ProgressMessage, ProtocolError};
 use crate::session::AnswerValue;
 use crate::sim::Geometry;
 use crate::store::Status;
@@ -65,14 +65,6 @@ pub struct SessionHandle {
     pub(super) snapshot: watch::Receiver<Snapshot>,
 }
 
-/// The refusal when the owner has gone (the session ended while the command was on its way).
-fn ended() -> ProtocolError {
-    ProtocolError::new(
-        ErrorCode::SessionEnded,
-        "the session is not running; answers are closed",
-    )
-}
-
 impl SessionHandle {
     pub fn snapshot(&self) -> Snapshot {
         self.snapshot.borrow().clone()
@@ -97,9 +89,11 @@ impl SessionHandle {
             .send(Command::Answer { id, value, reply })
             .is_err()
         {
-            return AnswerReply::Refused(ended());
+            return AnswerReply::Refused(ProtocolError::session_ended());
         }
-        answer.await.unwrap_or(AnswerReply::Refused(ended()))
+        answer
+            .await
+            .unwrap_or(AnswerReply::Refused(ProtocolError::session_ended()))
     }
 
     /// Take back the answer to query `id`.
@@ -107,8 +101,8 @@ impl SessionHandle {
         let (reply, answer) = oneshot::channel();
         self.commands
             .send(Command::Undo { id, reply })
-            .map_err(|_| ended())?;
-        answer.await.map_err(|_| ended())?
+            .map_err(|_| ProtocolError::session_ended())?;
+        answer.await.map_err(|_| ProtocolError::session_ended())?
     }
 
     /// Ask the owner to stop the session; `false` if it had already gone.

@@ -203,11 +203,7 @@ async fn refuse_until_closed(mut socket: WebSocket) {
 }
 
 fn session_ended(id: Option<i64>) -> ServerMessage {
-    ProtocolError::new(
-        ErrorCode::SessionEnded,
-        "the session is not running; answers are closed",
-    )
-    .to_message(id)
+    ProtocolError::session_ended().to_message(id)
 }
 
 async fn handle(session: &SessionHandle, limit: &mut RateLimit, t: &str) -> Option<ServerMessage> {
