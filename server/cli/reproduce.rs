@@ -13,9 +13,10 @@ use clap::Args;
 use crate::report::grid::{DEFAULT_QUERIES, Figure, GridConfig, RunSpec};
 use crate::report::methods::paper_dref_rate;
 use crate::report::run_files::{is_finished, read_train_summary, run_dir};
-use crate::report::runner::{Outcome, RunStatus, run_grid};
+use crate::report::runner::{Outcome, RunStatus, run_grid_with_env};
 use crate::report::stats::mean_se;
 use crate::report::write_report;
+use crate::rl::kernels;
 use crate::sim::Task;
 
 use self::progress::{Progress, track};
@@ -63,7 +64,7 @@ pub struct ReproduceArgs {
     pub program: Option<PathBuf>,
 }
 
-pub fn run(args: ReproduceArgs) -> anyhow::Result<()> {
+pub fn run(args: ReproduceArgs, compute: &super::compute::Compute) -> anyhow::Result<()> {
     if args.report_only {
         if !args.out.is_dir() {
             bail!("--report-only: {} is not a directory", args.out.display());
@@ -80,7 +81,23 @@ pub fn run(args: ReproduceArgs) -> anyhow::Result<()> {
         |j| j as usize,
     );
 
+    // Each run gets the cores its share allows (one each when the jobs fill the machine), and
+    // every run computes with the kernels chosen here.
+    let threads = compute
+        .threads
+        .unwrap_or_else(|| (kernels::cores() / jobs).clamp(1, 2));
+    let env = [
+        ("DUALREP_THREADS".to_string(), threads.to_string()),
+        (
+            "DUALREP_KERNELS".to_string(),
+            compute.path.name().to_string(),
+        ),
+    ];
     let progress = Progress::new(config.total_runs());
+    progress.line(&format!(
+        "{jobs} run(s) at once, each on {threads} thread(s) with the {} kernels",
+        compute.path
+    ));
     let mut runs = config.initial_runs();
     if config.wants_matched() && !config.has_dref() {
         for &task in &config.tasks {
@@ -115,7 +132,7 @@ pub fn run(args: ReproduceArgs) -> anyhow::Result<()> {
         config.matched_runs(task, rate)
     };
     let mut running = Vec::new();
-    let outcomes = run_grid(&program, runs, jobs, follow_up, |event| {
+    let outcomes = run_grid_with_env(&program, &env, runs, jobs, follow_up, |event| {
         track(&mut running, &event);
         progress.event(&event, &running);
     });

@@ -58,6 +58,18 @@ pub fn run_grid(
     program: &Path,
     runs: Vec<RunSpec>,
     jobs: usize,
+    follow_up: impl FnMut(&Outcome) -> Vec<RunSpec>,
+    on_event: impl FnMut(Event<'_>),
+) -> Vec<Outcome> {
+    run_grid_with_env(program, &[], runs, jobs, follow_up, on_event)
+}
+
+/// [`run_grid`] with `env` set in every child's environment.
+pub fn run_grid_with_env(
+    program: &Path,
+    env: &[(String, String)],
+    runs: Vec<RunSpec>,
+    jobs: usize,
     mut follow_up: impl FnMut(&Outcome) -> Vec<RunSpec>,
     mut on_event: impl FnMut(Event<'_>),
 ) -> Vec<Outcome> {
@@ -95,11 +107,12 @@ pub fn run_grid(
             on_event(Event::Started(&spec));
             let slot = in_flight.len();
             let (tx, program, child_spec) = (tx.clone(), program.to_path_buf(), spec.clone());
+            let env = env.to_vec();
             in_flight.push(Some(spec));
             running += 1;
             thread::spawn(move || {
                 let start = Instant::now();
-                let status = run_child(&program, &child_spec);
+                let status = run_child(&program, &env, &child_spec);
                 // The receiver lives until every child has reported; a send cannot fail.
                 let _ = tx.send((slot, status, start.elapsed().as_secs_f64()));
             });
@@ -123,13 +136,14 @@ pub fn run_grid(
 }
 
 /// Runs one child to completion and says how it went.
-fn run_child(program: &Path, spec: &RunSpec) -> RunStatus {
+fn run_child(program: &Path, env: &[(String, String)], spec: &RunSpec) -> RunStatus {
     let stderr_path = spec.dir.join("stderr.log");
     let started = fs::create_dir_all(&spec.dir).and_then(|()| {
         let stdout = File::create(spec.dir.join("stdout.log"))?;
         let stderr = File::create(&stderr_path)?;
         Command::new(program)
             .args(&spec.args)
+            .envs(env.iter().map(|(k, v)| (k, v)))
             .stdin(Stdio::null())
             .stdout(stdout)
             .stderr(stderr)

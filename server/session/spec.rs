@@ -12,6 +12,7 @@ use crate::guidance::drpl::run::PreferenceRunConfig;
 use crate::guidance::drpl::selection::QueryMethod;
 use crate::guidance::evaluative_run::EvaluativeRunConfig;
 use crate::guidance::feedback_schedule::EvaluativeMethod;
+use crate::rl::kernels::KernelPath;
 use crate::sim::Task;
 
 use super::events::QueryKind;
@@ -132,6 +133,9 @@ pub struct SessionSettings {
     pub record: bool,
     /// Also stream to a running Rerun viewer at this URL (else the server's `--rerun-connect`).
     pub rerun_connect: Option<String>,
+    /// The kernels the session computes with (the server's, recorded at launch, so that a
+    /// resumed session replays with the same numerics); `None` for sessions stored before.
+    pub kernels: Option<KernelPath>,
 }
 
 /// The algorithm's configuration, built from the spec.
@@ -141,7 +145,8 @@ pub enum RunConfig {
     Preference(PreferenceRunConfig),
 }
 
-const SETTING_KEYS: [&str; 6] = [
+const SETTING_KEYS: [&str; 7] = [
+    "kernels",
     "record",
     "rerun_connect",
     "pace_hz",
@@ -206,6 +211,17 @@ impl SessionSpec {
                         .filter(|s| !s.is_empty())
                         .ok_or_else(|| format!("rerun_connect: expected a viewer URL, got {v}"))?
                         .to_string(),
+                ),
+            },
+            kernels: match self.params.get("kernels") {
+                None => None,
+                Some(v) => Some(
+                    v.as_str()
+                        .ok_or_else(|| {
+                            format!("kernels: expected avx512, avx2 or portable, got {v}")
+                        })?
+                        .parse()
+                        .map_err(|e| format!("kernels: {e}"))?,
                 ),
             },
         })
