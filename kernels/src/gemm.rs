@@ -39,6 +39,8 @@ pub(crate) struct Product {
     pub b_cols: bool,
     pub c: *mut f32,
     pub c_js: usize,
+    /// 1, or `C` row-major (a transposed product): see [`TileArgs::c_is`].
+    pub c_is: usize,
     pub epilogue: Epilogue,
 }
 
@@ -109,8 +111,9 @@ pub(crate) unsafe fn product<I: Isa, const MV: usize, const NR: usize, const NMV
                     b_ks,
                     b_js,
                     cols: width,
-                    c: unsafe { p.c.add(i + j * p.c_js) },
+                    c: unsafe { p.c.add(i * p.c_is + j * p.c_js) },
                     c_js: p.c_js,
+                    c_is: p.c_is,
                 };
                 let epilogue = match p.epilogue {
                     Epilogue::Bias { bias, relu } if !bias.is_null() => Epilogue::Bias {
@@ -158,8 +161,9 @@ unsafe fn narrow<I: Isa, const NMV: usize>(part: &Part<'_>, p: &Product) {
             b_ks: p.b_ks,
             b_js: p.b_js,
             cols: p.n,
-            c: unsafe { p.c.add(i) },
+            c: unsafe { p.c.add(i * p.c_is) },
             c_js: p.c_js,
+            c_is: p.c_is,
         };
         let epilogue = match p.epilogue {
             Epilogue::Bias { bias, relu } if !bias.is_null() => Epilogue::Bias {

@@ -93,6 +93,7 @@ pub(crate) unsafe fn forward_part<I: Isa, const MV: usize, const NR: usize, cons
         b_cols: true,
         c: job.z,
         c_js: m,
+        c_is: 1,
         epilogue: Epilogue::Bias {
             bias: job.b.as_ptr(),
             relu: job.relu,
@@ -125,22 +126,46 @@ pub(crate) unsafe fn weight_grad_part<
             }
         }
     }
-    let p = Product {
-        m,
-        n,
-        k,
-        a: ASource::Columns {
-            ptr: job.x.as_ptr(),
-            ld: m,
-        },
-        a_pack: job.pack,
-        b: job.dz.as_ptr(),
-        b_ks: n,
-        b_js: 1,
-        b_cols: false,
-        c: job.dw,
-        c_js: m,
-        epilogue: Epilogue::Accumulate,
+    // With few inputs (a first layer), dW^T would be one short row tile per column: compute
+    // dW = dZ X^T instead, with the same sums, and write it row-major.
+    let p = if m <= I::LANES && n > m {
+        Product {
+            m: n,
+            n: m,
+            k,
+            a: ASource::Columns {
+                ptr: job.dz.as_ptr(),
+                ld: n,
+            },
+            a_pack: job.pack,
+            b: job.x.as_ptr(),
+            b_ks: m,
+            b_js: 1,
+            b_cols: false,
+            c: job.dw,
+            c_js: 1,
+            c_is: m,
+            epilogue: Epilogue::Accumulate,
+        }
+    } else {
+        Product {
+            m,
+            n,
+            k,
+            a: ASource::Columns {
+                ptr: job.x.as_ptr(),
+                ld: m,
+            },
+            a_pack: job.pack,
+            b: job.dz.as_ptr(),
+            b_ks: n,
+            b_js: 1,
+            b_cols: false,
+            c: job.dw,
+            c_js: m,
+            c_is: 1,
+            epilogue: Epilogue::Accumulate,
+        }
     };
     unsafe { product::<I, MV, NR, NMV>(part, &p) };
 }
@@ -168,6 +193,7 @@ pub(crate) unsafe fn input_grad_part<I: Isa, const MV: usize, const NR: usize, c
         b_cols: true,
         c: job.dx,
         c_js: m,
+        c_is: 1,
         epilogue: match job.h {
             Some(h) => Epilogue::Mask { h: h.as_ptr() },
             None => Epilogue::Store,

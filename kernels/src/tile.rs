@@ -26,6 +26,9 @@ pub(crate) struct TileArgs {
     pub cols: usize,
     pub c: *mut f32,
     pub c_js: usize,
+    /// `C`'s row stride: 1, or (a transposed product writing a row-major `C`) anything, with
+    /// the [`Epilogue::Accumulate`] or [`Epilogue::Store`] epilogue.
+    pub c_is: usize,
 }
 
 /// What happens to the accumulated `acc` before it is stored in `C`.
@@ -99,6 +102,11 @@ pub(crate) unsafe fn tile<
             }
         }
     }
+    if t.c_is != 1 {
+        // By value: a reference would let the accumulators escape, and the compiler would then
+        // store every one of them at every step of `k`.
+        return unsafe { store_strided::<I, MV, NR>(t, epilogue, acc, valid) };
+    }
     // Constant loop bounds, so that the accumulators stay in registers.
     #[allow(clippy::needless_range_loop)]
     for j in 0..NR {
@@ -139,6 +147,38 @@ pub(crate) unsafe fn tile<
                 } else {
                     I::store_first(c.add(at), out, n);
                 }
+            }
+        }
+    }
+}
+
+/// The epilogue for a `C` whose rows are not contiguous, element by element through the stack
+/// (once per tile, after `k` steps of arithmetic): the same additions as the vector epilogue.
+#[inline(never)]
+unsafe fn store_strided<I: Isa, const MV: usize, const NR: usize>(
+    t: &TileArgs,
+    epilogue: Epilogue,
+    acc: [[I::V; MV]; NR],
+    valid: [usize; MV],
+) {
+    let lanes = I::LANES;
+    let mut lane_values = [0.0f32; 64];
+    assert!(MV * lanes <= lane_values.len(), "tile taller than 64 rows");
+    for (j, column) in acc.iter().enumerate().take(t.cols) {
+        for (v, &sum) in column.iter().enumerate() {
+            unsafe { I::store(lane_values.as_mut_ptr().add(v * lanes), sum) };
+        }
+        for (v, &n) in valid.iter().enumerate() {
+            for r in 0..n {
+                let i = v * lanes + r;
+                let c = unsafe { &mut *t.c.add(i * t.c_is + j * t.c_js) };
+                *c = match epilogue {
+                    Epilogue::Accumulate => *c + lane_values[i],
+                    Epilogue::Store => lane_values[i],
+                    Epilogue::Bias { .. } | Epilogue::Mask { .. } => {
+                        unreachable!("a transposed product has no bias or mask")
+                    }
+                };
             }
         }
     }

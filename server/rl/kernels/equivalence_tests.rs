@@ -36,9 +36,7 @@ fn layer_outputs(
         n_out,
         offset: 3,
     };
-    let mut params = values(3 + layer.len(), 0.1);
-    params[3] = f32::NAN; // a NaN weight reaches some outputs; ReLU lets it through
-    params[3] = 0.25;
+    let params = values(3 + layer.len(), 0.1);
     let x = DMatrix::from_vec(n_in, batch, values(n_in * batch, 0.7));
     let dz = DMatrix::from_vec(n_out, batch, values(n_out * batch, 0.3));
     let h = DMatrix::from_vec(n_in, batch, values(n_in * batch, 0.9));
@@ -69,7 +67,9 @@ fn layer_outputs(
     })
 }
 
-const SHAPES: [(usize, usize, usize); 12] = [
+/// `(n_in, n_out, batch)`. The last three are large enough to be shared out over threads on
+/// the dot-product and narrow paths.
+const SHAPES: [(usize, usize, usize); 16] = [
     (10, 400, 64),
     (400, 300, 37),
     (300, 1, 50),
@@ -82,6 +82,10 @@ const SHAPES: [(usize, usize, usize); 12] = [
     (64, 64, 32),
     (1, 1, 1),
     (40, 17, 100),
+    (400, 300, 64),
+    (2000, 700, 3),
+    (1000, 4, 1100),
+    (4000, 1, 1100),
 ];
 
 #[test]
