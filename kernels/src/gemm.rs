@@ -53,9 +53,9 @@ pub(crate) fn packed_len(m: usize, k: usize) -> usize {
 }
 
 /// Pack `A`, then compute this member's tiles: whole columns of `C` in `NR`-wide chunks when
-/// there are at least as many column tiles as row tiles, else whole rows. A `C` of at most 4
-/// columns (a head's weight gradient) uses each row of `A` once: `A` is read in place by tiles
-/// of `NMV` vectors by 4 columns instead.
+/// there are at least as many column tiles as row tiles, else whole rows. A `C` of one column
+/// tile uses each row of `A` once, so a column-major `A` is read in place instead, by tiles of
+/// `NMV` vectors by 4 columns when `C` has at most 4 (a head's weight gradient).
 ///
 /// # Safety
 /// The operands hold their shapes, `C` is writable and aliases neither `A` nor `B`, and the
@@ -65,8 +65,13 @@ pub(crate) unsafe fn product<I: Isa, const MV: usize, const NR: usize, const NMV
     part: &Part<'_>,
     p: &Product,
 ) {
-    if p.n <= 4 {
-        return unsafe { narrow::<I, NMV>(part, p) };
+    if let ASource::Columns { .. } = p.a {
+        if p.n <= 4 {
+            return unsafe { in_place::<I, NMV, 4>(part, p) };
+        }
+        if p.n <= NR {
+            return unsafe { in_place::<I, MV, NR>(part, p) };
+        }
     }
     let mr = MV * I::LANES;
     let row_tiles = p.m.div_ceil(mr);
@@ -141,13 +146,13 @@ pub(crate) unsafe fn product<I: Isa, const MV: usize, const NR: usize, const NMV
     }
 }
 
-/// [`product`] for `n <= 4`: members share out rows; `A` (column-major) is read in place.
+/// [`product`] for `n <= NR`: members share out rows; `A` (column-major) is read in place.
 #[inline(always)]
-unsafe fn narrow<I: Isa, const NMV: usize>(part: &Part<'_>, p: &Product) {
+unsafe fn in_place<I: Isa, const MV: usize, const NR: usize>(part: &Part<'_>, p: &Product) {
     let ASource::Columns { ptr: a, ld } = p.a else {
-        unreachable!("a forward pass with a batch of at most 4 is a dot product")
+        unreachable!("only a column-major A is read in place")
     };
-    let mr = NMV * I::LANES;
+    let mr = MV * I::LANES;
     let rows = part.share(p.m, mr);
     let mut i = rows.start;
     while i < rows.end {
@@ -177,10 +182,10 @@ unsafe fn narrow<I: Isa, const NMV: usize>(part: &Part<'_>, p: &Product) {
         };
         unsafe {
             match (p.b_cols, height == mr) {
-                (true, true) => tile::<I, NMV, 4, true, true>(&args, epilogue),
-                (false, true) => tile::<I, NMV, 4, false, true>(&args, epilogue),
-                (true, false) => tile::<I, NMV, 4, true, false>(&args, epilogue),
-                (false, false) => tile::<I, NMV, 4, false, false>(&args, epilogue),
+                (true, true) => tile::<I, MV, NR, true, true>(&args, epilogue),
+                (false, true) => tile::<I, MV, NR, false, true>(&args, epilogue),
+                (true, false) => tile::<I, MV, NR, true, false>(&args, epilogue),
+                (false, false) => tile::<I, MV, NR, false, false>(&args, epilogue),
             }
         }
         i += mr;
