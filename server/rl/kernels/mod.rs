@@ -233,6 +233,13 @@ pub fn with_path<R>(path: KernelPath, f: impl FnOnce() -> R) -> R {
     f()
 }
 
+/// Run `f` on every kernel path this CPU has (tests, benchmarks), this thread switched to each.
+pub fn on_every_path(mut f: impl FnMut(KernelPath)) {
+    for path in KernelPath::ALL.into_iter().filter(|p| p.is_available()) {
+        with_path(path, || f(path));
+    }
+}
+
 /// Puts a thread-local back when dropped.
 struct Restore<T: Copy + 'static>(&'static std::thread::LocalKey<Cell<T>>, T);
 
