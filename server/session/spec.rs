@@ -343,6 +343,22 @@ mod tests {
     }
 
     #[test]
+    fn kernels_are_a_session_setting_and_nonsense_is_refused() {
+        let s = spec("dref", json!({"kernels": "portable"}));
+        s.validate().unwrap();
+        assert_eq!(s.settings().unwrap().kernels, Some(KernelPath::Portable));
+        assert_eq!(spec("dref", json!({})).settings().unwrap().kernels, None);
+        for bad in [json!({"kernels": "fast"}), json!({"kernels": 2})] {
+            assert!(
+                spec("dref", bad)
+                    .validate()
+                    .unwrap_err()
+                    .contains("kernels")
+            );
+        }
+    }
+
+    #[test]
     fn task_variants_reach_the_env() {
         let s = spec("dref", json!({"variant": "uniform", "reward_scale": 0.1}));
         let RunConfig::Evaluative(config) = s.run_config().unwrap() else {
