@@ -14,7 +14,7 @@ use std::thread::{self, JoinHandle, Thread};
 use std::time::{Duration, Instant};
 
 /// One member's view of a job: which share is its own, and the team's barrier.
-pub(crate) struct Part<'a> {
+pub struct Part<'a> {
     pub index: usize,
     pub count: usize,
     barrier: Option<&'a SpinBarrier>,
@@ -39,8 +39,9 @@ impl Part<'_> {
     }
 }
 
-/// Run `job` on `threads` threads of this thread's team (the caller is member 0).
-pub(crate) fn run(threads: usize, job: &(dyn Fn(&Part<'_>) + Sync)) {
+/// Run `job` on `threads` threads of this thread's team (the caller is member 0). Public for
+/// element-wise work outside the products (the optimiser's step) that shares the same threads.
+pub fn run(threads: usize, job: &(dyn Fn(&Part<'_>) + Sync)) {
     if threads <= 1 {
         return job(&Part {
             index: 0,
