@@ -20,6 +20,8 @@
 //! - [`guidance`]: when to ask (DREF's UCB query rule, EF-p%), who answers (the
 //!   `EvaluativeTrainer` trait, the expert oracle), the evaluative training loop; later, what
 //!   to ask (DRPL).
+//! - [`settings`]: every setting by name as one typed list (`Settings`), read by launch
+//!   requests, `--set`/TOML, `GET /api/tasks` and the dashboard; validated once.
 //! - [`session`]: one training session as a plain loop on its own thread, talking to the
 //!   server only through channels; pacing, queries to people, replay of stored answers on
 //!   resume, checkpoints. No async runtime, no database.
@@ -54,6 +56,7 @@ pub mod rl;
 pub mod scene_graph;
 pub mod server;
 pub mod session;
+pub mod settings;
 pub mod shipped;
 pub mod sim;
 pub mod store;

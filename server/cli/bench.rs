@@ -20,8 +20,10 @@ use rand_distr::StandardNormal;
 use serde::Serialize;
 
 use crate::guidance::drpl::belief::{Belief, BeliefConfig, Response};
+use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::rl::replay::{ReplayBuffer, Transition};
-use crate::rl::sac::{Sac, SacConfig, mflop_per_update};
+use crate::rl::sac::{Sac, mflop_per_update};
+use crate::settings::Settings;
 use crate::sim::Task;
 
 #[derive(Debug, Args)]
@@ -118,25 +120,28 @@ fn bench_sac(args: SacBenchArgs) -> anyhow::Result<()> {
     if !args.seconds.is_finite() || args.seconds <= 0.0 {
         bail!("--seconds must be positive");
     }
-    let mut config = SacConfig::for_task(args.task);
-    if let Some(hidden) = &args.hidden {
-        config
-            .set("hidden", hidden)
-            .map_err(anyhow::Error::msg)
-            .context("--hidden")?;
-    }
+    let settings = Settings::from_pairs(
+        [
+            ("hidden", args.hidden.as_deref()),
+            ("human_critic", Some("true")),
+        ]
+        .into_iter()
+        .filter_map(|(k, v)| Some((k, v?))),
+    )
+    .map_err(anyhow::Error::msg)
+    .context("--hidden")?;
+    let mut config = settings
+        .evaluative(args.task, EvaluativeMethod::Dref, 0)
+        .map_err(anyhow::Error::msg)
+        .context("--hidden")?
+        .sac;
     if let Some(batch) = args.batch {
-        config
-            .set("batch_size", &batch.to_string())
-            .map_err(anyhow::Error::msg)
-            .context("--batch")?;
+        if batch == 0 {
+            bail!("--batch must be at least 1");
+        }
+        config.batch_size = batch;
     }
     config.gradient_steps = 1;
-    if config.human_critic.is_none() {
-        config
-            .set("human_critic", "true")
-            .map_err(anyhow::Error::msg)?;
-    }
     let (obs_dim, act_dim) = task_dims(args.task);
     let replay = random_replay(obs_dim, act_dim, 100_000);
     let mut sac = Sac::new(obs_dim, act_dim, config.clone(), 0);

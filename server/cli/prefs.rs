@@ -122,14 +122,11 @@ fn clip_line(clip: &Clip, graph_dim: usize) -> ClipLine<'_> {
 
 /// The run's config: defaults, then the TOML file, then `--set`, then the dedicated flags.
 pub fn resolve_config(args: &PrefsArgs) -> anyhow::Result<PreferenceRunConfig> {
-    let mut config = PreferenceRunConfig::new(args.task, args.method, args.seed);
-    let from_file = match &args.overrides.config {
-        Some(path) => overrides::read_toml(path)?,
-        None => Vec::new(),
-    };
-    for (k, v) in from_file.iter().chain(&args.overrides.overrides) {
-        config.set(k, v).map_err(anyhow::Error::msg)?;
-    }
+    let mut config = args
+        .overrides
+        .settings()?
+        .preference(args.task, args.method, args.seed)
+        .map_err(anyhow::Error::msg)?;
     if let Some(n) = args.trajectories {
         config.trajectories = usize::try_from(n)?;
     }

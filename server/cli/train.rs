@@ -171,15 +171,9 @@ pub fn resolve_config(
     seed: u64,
     args: &overrides::OverrideArgs,
 ) -> anyhow::Result<EvaluativeRunConfig> {
-    let mut config = EvaluativeRunConfig::new(task, method, seed);
-    let from_file = match &args.config {
-        Some(path) => overrides::read_toml(path)?,
-        None => Vec::new(),
-    };
-    for (k, v) in from_file.iter().chain(&args.overrides) {
-        overrides::apply(&mut config, k, v).map_err(anyhow::Error::msg)?;
-    }
-    Ok(config)
+    args.settings()?
+        .evaluative(task, method, seed)
+        .map_err(anyhow::Error::msg)
 }
 
 /// Load an expert written by `dualrep expert`.

@@ -93,40 +93,6 @@ impl EvaluativeRunConfig {
     pub fn make_env(&self) -> Box<dyn Env> {
         self.task.make_env_with(&self.env)
     }
-
-    /// Override one hyper-parameter by name (`--set`, TOML files, the server's `params`): the
-    /// query rule's, scene graph's, env's and reward scale's keys here, every other key to SAC.
-    pub fn set(&mut self, key: &str, value: &str) -> Result<(), String> {
-        let bad = |what: &str| format!("{key}={value}: expected {what}");
-        match key {
-            "c" => self.query_rule.c = value.parse().map_err(|_| bad("a number"))?,
-            "k" => self.query_rule.k = value.parse().map_err(|_| bad("a non-negative integer"))?,
-            "ucb" => {
-                self.query_rule.form = match value {
-                    "authors" => UcbForm::Authors,
-                    "paper" => UcbForm::Paper,
-                    _ => return Err(bad("authors or paper")),
-                }
-            }
-            "side_engines_on_a0" => {
-                let on: bool = value.parse().map_err(|_| bad("true or false"))?;
-                match &mut self.scene_graph {
-                    SceneGraph::LunarLander { side_engines_on_a0 } => *side_engines_on_a0 = on,
-                    _ => return Err(format!("{key} applies to lunar-lander only")),
-                }
-            }
-            "reward_scale" => {
-                self.reward_scale = value
-                    .parse::<f32>()
-                    .ok()
-                    .filter(|x| x.is_finite() && *x > 0.0)
-                    .ok_or_else(|| bad("a positive number"))?
-            }
-            _ if EnvOptions::owns(key) => self.env.set(self.task, key, value)?,
-            _ => self.sac.set(key, value)?,
-        }
-        Ok(())
-    }
 }
 
 /// One finished episode, as a row of `metrics.csv`.

@@ -1,7 +1,5 @@
 //! `/api/sessions`: launch, list, inspect, stop, resume; episodes, answers, export.
 
-use std::collections::BTreeMap;
-
 use axum::Json;
 use axum::extract::rejection::JsonRejection;
 use axum::extract::{Path, Query, State};
@@ -14,6 +12,7 @@ use super::auth::SessionAccess;
 use super::error::{ApiError, ApiResult};
 use crate::session::spec::DEFAULT_QUERIES;
 use crate::session::{SessionMethod, SessionSpec, TrainerKind};
+use crate::settings::Settings;
 use crate::sim::Task;
 use crate::store::{AnswerCounts, SessionRow, Status, Survey};
 
@@ -30,26 +29,35 @@ pub struct LaunchRequest {
     pub steps: Option<u64>,
     /// Queries (preference methods) [default: 40].
     pub queries: Option<u64>,
+    /// Session settings and hyper-parameters by name (`GET /api/tasks` lists them with their
+    /// defaults), read into [`Settings`] by [`LaunchRequest::into_spec`]: a setting that is
+    /// unknown, of the wrong type or out of range makes an invalid session (422), not a
+    /// malformed request.
     #[serde(default)]
-    pub params: BTreeMap<String, serde_json::Value>,
+    pub params: serde_json::Value,
 }
 
 impl LaunchRequest {
-    pub fn into_spec(self) -> Result<SessionSpec, String> {
+    pub fn into_spec(self) -> Result<SessionSpec, ApiError> {
+        let params = match self.params {
+            serde_json::Value::Null => Settings::default(),
+            params => Settings::from_json(params)
+                .map_err(|e| ApiError::InvalidSession(format!("params: {e}")))?,
+        };
         let budget = if self.method.is_preference() {
             if self.steps.is_some() {
-                return Err(format!(
+                return Err(ApiError::BadRequest(format!(
                     "{} asks queries: give `queries`, not `steps`",
                     self.method
-                ));
+                )));
             }
             self.queries.unwrap_or(DEFAULT_QUERIES as u64)
         } else {
             if self.queries.is_some() {
-                return Err(format!(
+                return Err(ApiError::BadRequest(format!(
                     "{} takes environment steps: give `steps`, not `queries`",
                     self.method
-                ));
+                )));
             }
             self.steps.unwrap_or(match self.task {
                 Task::LunarLander => 150_000,
@@ -62,7 +70,7 @@ impl LaunchRequest {
             trainer: self.trainer,
             seed: self.seed,
             budget,
-            params: self.params,
+            params,
         })
     }
 }
@@ -152,7 +160,7 @@ pub async fn create(
         StatusCode::PAYLOAD_TOO_LARGE => ApiError::PayloadTooLarge(super::MAX_BODY_BYTES),
         _ => ApiError::BadRequest(e.body_text()),
     })?;
-    let spec = request.into_spec().map_err(ApiError::BadRequest)?;
+    let spec = request.into_spec()?;
     let row = state.hub.launch(spec).await?;
     let status = state.hub.status_of(&row);
     Ok((

@@ -11,8 +11,6 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
-use super::Task;
-
 /// The start pose, speed and gripper of Reaching and Placing.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -78,9 +76,6 @@ impl Default for EnvOptions {
     }
 }
 
-/// The keys [`EnvOptions::set`] takes, for error messages and the settings lists.
-pub const KEYS: [&str; 4] = ["variant", "success", "observe_grip", "release_at"];
-
 impl EnvOptions {
     /// Placing's success rule after the variant's default is applied.
     pub fn placing_success(&self) -> PlacingSuccess {
@@ -88,62 +83,6 @@ impl EnvOptions {
             Variant::Authors => PlacingSuccess::Over,
             Variant::Uniform => PlacingSuccess::Through,
         })
-    }
-
-    /// Whether `key` is one of ours (so callers can route other keys elsewhere).
-    pub fn owns(key: &str) -> bool {
-        KEYS.contains(&key)
-    }
-
-    /// Set one switch by name (`--set`, TOML files, a session's `params`), checking that it
-    /// applies to `task`.
-    pub fn set(&mut self, task: Task, key: &str, value: &str) -> Result<(), String> {
-        let bad = |what: &str| format!("{key}={value}: expected {what}");
-        let placing_only = || -> Result<(), String> {
-            if task == Task::Placing {
-                Ok(())
-            } else {
-                Err(format!("{key} applies to placing only, not {task}"))
-            }
-        };
-        match key {
-            "variant" => {
-                if task == Task::LunarLander {
-                    return Err(format!("{key} applies to reaching and placing, not {task}"));
-                }
-                self.variant = match value {
-                    "authors" => Variant::Authors,
-                    "uniform" => Variant::Uniform,
-                    _ => return Err(bad("authors or uniform")),
-                };
-            }
-            "success" => {
-                placing_only()?;
-                self.success = Some(match value {
-                    "over" => PlacingSuccess::Over,
-                    "through" => PlacingSuccess::Through,
-                    _ => return Err(bad("over or through")),
-                });
-            }
-            "observe_grip" => {
-                placing_only()?;
-                self.observe_grip = match value {
-                    "sign" => GripObservation::Sign,
-                    "level" => GripObservation::Level,
-                    _ => return Err(bad("sign or level")),
-                };
-            }
-            "release_at" => {
-                placing_only()?;
-                self.release_at = value
-                    .parse::<f32>()
-                    .ok()
-                    .filter(|x| (-1.0..1.0).contains(x))
-                    .ok_or_else(|| bad("a number in [-1, 1)"))?;
-            }
-            _ => return Err(format!("unknown env option {key:?}")),
-        }
-        Ok(())
     }
 }
 
@@ -171,30 +110,6 @@ mod tests {
             ..o
         };
         assert_eq!(uniform.placing_success(), PlacingSuccess::Through);
-    }
-
-    #[test]
-    fn set_checks_keys_values_and_tasks() {
-        let mut o = EnvOptions::default();
-        o.set(Task::Placing, "variant", "uniform").unwrap();
-        o.set(Task::Placing, "success", "over").unwrap();
-        o.set(Task::Placing, "observe_grip", "level").unwrap();
-        o.set(Task::Placing, "release_at", "0.9").unwrap();
-        assert_eq!(
-            o,
-            EnvOptions {
-                variant: Variant::Uniform,
-                success: Some(PlacingSuccess::Over),
-                observe_grip: GripObservation::Level,
-                release_at: 0.9,
-            }
-        );
-        assert!(o.set(Task::Placing, "variant", "robosuite").is_err());
-        assert!(o.set(Task::Placing, "release_at", "1.5").is_err());
-        assert!(o.set(Task::Placing, "release_at", "NaN").is_err());
-        assert!(o.set(Task::Reaching, "success", "over").is_err());
-        assert!(o.set(Task::LunarLander, "variant", "uniform").is_err());
-        o.set(Task::Reaching, "variant", "authors").unwrap();
     }
 
     #[test]

@@ -69,8 +69,6 @@ function buildForm() {
   const g2 = Object.assign(document.createElement("optgroup"), { label: "preference (queries)" });
   for (const m of t.methods.preference) g2.append(option(m));
   ev.append(g1, g2);
-  $("pace_hz").placeholder = String(t.session_params.pace_hz);
-  $("answer_timeout_s").placeholder = String(t.session_params.answer_timeout_s);
   $("task").addEventListener("change", fillDefaults);
   $("method").addEventListener("change", fillDefaults);
   $("launch-form").addEventListener("submit", launch);
@@ -81,26 +79,19 @@ function currentTask() {
   return state.tasks.tasks.find((t) => t.id === $("task").value);
 }
 
-/** Flatten a defaults object one level: nested groups show their inner keys. */
-function flatten(obj, out = {}) {
-  for (const [k, v] of Object.entries(obj ?? {})) {
-    if (v && typeof v === "object" && !Array.isArray(v)) flatten(v, out);
-    else out[k] = v;
-  }
-  return out;
-}
-
 function fillDefaults() {
   const task = currentTask();
   const pref = isPreference($("method").value);
   $("budget-label").textContent = pref ? "Queries" : "Steps";
   $("budget").placeholder = String(pref ? task.defaults.queries : task.defaults.steps);
-  const defaults = flatten(pref ? task.defaults.drpl : task.defaults.dref);
-  const extra = { checkpoint_every: state.tasks.session_params.checkpoint_every, clip_frames: state.tasks.session_params.clip_frames };
+  // The server's one list of settings, at their defaults for this task and method family.
+  const settings = task.settings[pref ? "preference" : "evaluative"];
+  $("pace_hz").placeholder = String(settings.pace_hz);
+  $("answer_timeout_s").placeholder = String(settings.answer_timeout_s);
   const box = $("params");
   box.replaceChildren();
-  for (const [k, v] of Object.entries({ ...defaults, ...extra })) {
-    if (["task", "method", "seed", "steps", "queries"].includes(k)) continue;
+  for (const [k, v] of Object.entries(settings)) {
+    if (["pace_hz", "answer_timeout_s"].includes(k)) continue;
     const label = document.createElement("label");
     label.textContent = k;
     const input = Object.assign(document.createElement("input"), { name: `param:${k}`, placeholder: JSON.stringify(v) });

@@ -13,6 +13,7 @@ pub enum Acquisition {
     #[default]
     Uniform,
     /// The candidate with the highest mutual information with the belief \[aprel\].
+    #[serde(alias = "mutual-information")]
     MutualInformation,
 }
 
