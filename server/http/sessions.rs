@@ -267,7 +267,6 @@ pub async fn export(
             let io = |e: csv::Error| ApiError::ExportFailed(e.to_string());
             w.write_record([
                 "query_id",
-                "seq",
                 "kind",
                 "step",
                 "abstract_state",
@@ -283,7 +282,6 @@ pub async fn export(
                 let value = serde_json::to_string(&a.value).unwrap_or_default();
                 w.write_record([
                     a.query_id.to_string(),
-                    a.seq.to_string(),
                     a.kind.as_str().to_string(),
                     a.step.to_string(),
                     a.abstract_state.to_string(),

@@ -50,14 +50,13 @@ impl Owner {
                 content,
             } => {
                 let payload = serde_json::to_string(&content).expect("query content serialises");
-                let query_id = self
+                let row = self
                     .store
                     .upsert_query(&self.id, seq, self.kind, step, abstract_state, &payload)
                     .await?;
                 let timeout = self.answer_timeout;
                 let text: Arc<str> = ServerMessage::Query(Box::new(QueryMessage {
-                    id: query_id,
-                    seq,
+                    id: seq,
                     step,
                     abstract_state,
                     expires_in_ms: timeout.as_millis() as u64,
@@ -65,7 +64,7 @@ impl Owner {
                 }))
                 .to_text()
                 .into();
-                self.pending = Some(Open::new(query_id, seq, text.clone(), timeout));
+                self.pending = Some(Open::new(seq, row, text.clone(), timeout));
                 self.set_status(Status::Waiting, None).await;
                 self.broadcast(text);
             }

@@ -17,7 +17,7 @@ use super::Hub;
 use super::answers::Undoable;
 use super::episode_frames::EpisodeFrames;
 use super::handle::{Command, Joined, SessionHandle, Snapshot};
-use crate::protocol::{ProgressMessage, QueryKind, ServerMessage, WithdrawReason};
+use crate::protocol::{ProgressMessage, QueryId, QueryKind, ServerMessage, WithdrawReason};
 use crate::session::{AnswerValue, Control, Ending, SessionEvent, SessionSpec};
 use crate::sim::Geometry;
 use crate::store::{Status, Store, SyntheticAnswer};
@@ -32,8 +32,10 @@ const RECENT_ANSWERS: usize = 256;
 /// A query open for answers.
 #[derive(Clone, Debug)]
 pub(super) struct Open {
-    pub id: i64,
-    pub seq: u64,
+    /// The session's query number: the query's id on the wire.
+    pub id: QueryId,
+    /// Its row in the database's `queries` table.
+    pub row: i64,
     /// The query message, serialised once for every browser.
     pub text: Arc<str>,
     pub asked: Instant,
@@ -41,11 +43,11 @@ pub(super) struct Open {
 }
 
 impl Open {
-    pub fn new(id: i64, seq: u64, text: Arc<str>, timeout: Duration) -> Self {
+    pub fn new(id: QueryId, row: i64, text: Arc<str>, timeout: Duration) -> Self {
         let asked = Instant::now();
         Self {
             id,
-            seq,
+            row,
             text,
             asked,
             deadline: asked + timeout,
@@ -71,7 +73,7 @@ pub(super) struct Owner {
     /// A query open again after an undo (the session may meanwhile wait on `pending`).
     pub reopened: Option<Open>,
     /// The latest committed answers, newest last.
-    pub recent: VecDeque<(i64, AnswerValue)>,
+    pub recent: VecDeque<(QueryId, AnswerValue)>,
     /// The latest answer a trainer gave (not a timeout's), until undone or too old.
     pub undoable: Option<Undoable>,
     /// The session thread's controls, while it runs.

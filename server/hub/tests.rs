@@ -95,8 +95,9 @@ fn content() -> QueryContent {
 }
 
 impl Harness {
-    /// Ask query `seq` and return its id once the owner has stored and opened it.
-    async fn ask(&self, seq: u64) -> i64 {
+    /// Ask query `seq` and return its id on the wire once the owner has stored and opened it
+    /// (the session's query number: `seq` itself).
+    async fn ask(&self, seq: u64) -> u64 {
         self.events
             .send(SessionEvent::Query {
                 seq,
@@ -110,7 +111,8 @@ impl Harness {
         let query: serde_json::Value =
             serde_json::from_str(joined.catch_up.last().unwrap()).unwrap();
         assert_eq!(query["type"], "query");
-        query["id"].as_i64().unwrap()
+        assert_eq!(query["id"], seq);
+        seq
     }
 
     /// Wait (on the owner, not the clock) until the published status satisfies `ok`.
@@ -159,7 +161,7 @@ async fn a_query_counts_as_no_feedback_exactly_at_its_timeout() {
     h.wait_for(|s| s == Status::Running).await;
     let answers = h.store.answers("s1").await.unwrap();
     assert_eq!(answers.len(), 1);
-    assert_eq!(answers[0].query_id, id);
+    assert_eq!(answers[0].query_id, id as i64);
     assert_eq!(answers[0].who, crate::session::Answerer::Timeout);
     // Late: the timeout's answer stands.
     assert!(matches!(

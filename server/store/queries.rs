@@ -23,8 +23,8 @@ pub struct QueryRow {
 /// One answered query, as `GET /api/sessions/{id}/answers` lists it.
 #[derive(Clone, Debug, Serialize)]
 pub struct AnswerRow {
+    /// The session's query number (the query's id on the websocket).
     pub query_id: i64,
-    pub seq: i64,
     pub kind: QueryKind,
     pub step: i64,
     pub abstract_state: i64,
@@ -94,11 +94,14 @@ impl Store {
         Ok(row.get("id"))
     }
 
-    pub async fn query(&self, id: i64) -> Result<Option<QueryRow>> {
+    /// A session's query by its number (its id on the wire).
+    pub async fn query_by_number(&self, session_id: &str, seq: u64) -> Result<Option<QueryRow>> {
         let row = sqlx::query(
-            "SELECT id, session_id, seq, kind, step, abstract_state, asked_at FROM queries WHERE id = ?",
+            "SELECT id, session_id, seq, kind, step, abstract_state, asked_at FROM queries
+             WHERE session_id = ? AND seq = ?",
         )
-        .bind(id)
+        .bind(session_id)
+        .bind(seq as i64)
         .fetch_optional(self.pool())
         .await?;
         Ok(row.map(|r| QueryRow {
@@ -110,15 +113,6 @@ impl Store {
             abstract_state: r.get("abstract_state"),
             asked_at: r.get("asked_at"),
         }))
-    }
-
-    /// The stored payload (JSON text) of a query.
-    pub async fn query_payload(&self, id: i64) -> Result<Option<String>> {
-        let row = sqlx::query("SELECT payload FROM queries WHERE id = ?")
-            .bind(id)
-            .fetch_optional(self.pool())
-            .await?;
-        Ok(row.map(|r| r.get("payload")))
     }
 
     /// Commit an answer; returns only after the transaction is durable. Answers committing at
@@ -220,7 +214,7 @@ impl Store {
     /// Every answered query of a session, in the order asked.
     pub async fn answers(&self, session_id: &str) -> Result<Vec<AnswerRow>> {
         let rows = sqlx::query(
-            "SELECT q.id, q.seq, q.kind, q.step, q.abstract_state, q.asked_at,
+            "SELECT q.seq, q.kind, q.step, q.abstract_state, q.asked_at,
                     a.value, a.who, a.answered_at, a.latency_ms, a.revision
              FROM answers a JOIN queries q ON q.id = a.query_id
              WHERE a.session_id = ? ORDER BY q.seq",
@@ -231,8 +225,7 @@ impl Store {
         Ok(rows
             .iter()
             .map(|r| AnswerRow {
-                query_id: r.get("id"),
-                seq: r.get("seq"),
+                query_id: r.get("seq"),
                 kind: r.get("kind"),
                 step: r.get("step"),
                 abstract_state: r.get("abstract_state"),

@@ -16,7 +16,7 @@ use crate::http::auth::SessionAccess;
 use crate::http::error::ApiError;
 use crate::hub::{AnswerReply, Joined, SessionHandle};
 use crate::protocol::{
-    ClientMessage, ErrorCode, ProtocolError, QueryKind, ServerMessage, id_of, parse_client,
+    ClientMessage, ErrorCode, ProtocolError, QueryId, QueryKind, ServerMessage, id_of, parse_client,
 };
 use crate::scene_graph::SceneGraph;
 use crate::store::SessionRow;
@@ -202,7 +202,7 @@ async fn refuse_until_closed(mut socket: WebSocket) {
     }
 }
 
-fn session_ended(id: Option<i64>) -> ServerMessage {
+fn session_ended(id: Option<QueryId>) -> ServerMessage {
     ProtocolError::session_ended().to_message(id)
 }
 
