@@ -11,14 +11,15 @@ use anyhow::{Context, bail};
 use clap::Args;
 
 use crate::report::grid::{DEFAULT_QUERIES, Figure, GridConfig, RunSpec};
+use crate::report::local::LocalPool;
 use crate::report::methods::paper_dref_rate;
 use crate::report::run_files::{is_finished, read_train_summary, run_dir};
-use crate::report::runner::{Outcome, RunStatus, run_grid};
+use crate::report::runner::{Outcome, RunStatus, Waiting, run_grid};
 use crate::report::stats::mean_se;
 use crate::report::write_report;
 use crate::sim::Task;
 
-use self::progress::{Progress, track};
+use self::progress::Progress;
 
 #[derive(Debug, Args)]
 pub struct ReproduceArgs {
@@ -114,12 +115,12 @@ pub fn run(args: ReproduceArgs) -> anyhow::Result<()> {
         ));
         config.matched_runs(task, rate)
     };
-    let mut running = Vec::new();
-    let outcomes = run_grid(&program, runs, jobs, follow_up, |event| {
-        track(&mut running, &event);
-        progress.event(&event, &running);
+    let mut pool = LocalPool::new(&program, jobs);
+    let grid = run_grid(&mut pool, runs, Waiting::UntilDone, follow_up, |event| {
+        progress.event(&event)
     });
     progress.finish();
+    let outcomes = grid?.outcomes;
 
     let failed: Vec<&Outcome> = outcomes
         .iter()
