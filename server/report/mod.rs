@@ -4,7 +4,8 @@
 //! - [`grid`] (pure): which runs a figure needs and the command line of each.
 //! - [`runner`]: runs them through an executor, skipping finished ones; [`run_end`]: how a run
 //!   ended, judged alike by every executor.
-//! - The executors: [`local`] (`dualrep train` / `dualrep prefs` child processes, J at a time).
+//! - The executors: [`local`] (`dualrep train` / `dualrep prefs` child processes, J at a time)
+//!   and [`slurm`] (the same command lines as tasks of `sbatch` job arrays on a cluster).
 //! - [`run_files`]: reads a run directory's `metrics.csv` / `alignment.csv` and `summary.json`.
 //! - [`stats`], [`aggregate`] (pure): mean and standard error over seeds, on a common step grid
 //!   for Figure 3 and per query for Figure 5.
@@ -22,6 +23,7 @@ pub mod plot;
 pub mod run_end;
 pub mod run_files;
 pub mod runner;
+pub mod slurm;
 pub mod stats;
 pub mod table;
 

@@ -11,7 +11,8 @@
 //!   executor whose runs outlive this process (a Slurm queue) goes on with them, and the next
 //!   invocation picks them up.
 //!
-//! The executors: [`super::local`] (child processes on this machine, J at a time).
+//! The executors: [`super::local`] (child processes on this machine, J at a time) and
+//! [`super::slurm`] (`sbatch` job arrays).
 
 use std::collections::VecDeque;
 
