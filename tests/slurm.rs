@@ -8,6 +8,7 @@
 //! failure.
 
 use std::fs;
+use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::thread;
@@ -118,24 +119,42 @@ fn slurm_fig5_grid_matches_the_local_table_and_resubmits_a_cancelled_task() {
         text(&queued.stdout)
     );
 
-    // One task is cancelled before it runs; the others are let go.
+    // One task is cancelled before it runs.
     assert!(
         cluster
             .output("scancel", &[&format!("{first}_1")])
             .status
             .success()
     );
+
+    // The same command, waiting: the three runs still held are waited for, and only the
+    // cancelled one is submitted again. They are let go once it has looked at the queue, so
+    // that none can finish before (and be skipped as finished instead).
+    let wait = [FIG5_TINY, &["--executor", "slurm", "--poll", "0.2"]].concat();
+    let mut child = reproduce(&cluster, &slurm, &wait)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
+    let mut head = String::new();
+    for line in lines.by_ref() {
+        let line = line.unwrap();
+        head += &line;
+        head.push('\n');
+        if line.starts_with("submitted ") {
+            break;
+        }
+    }
     assert!(
         cluster
             .output("scontrol", &["release", &first])
             .status
             .success()
     );
-
-    // The same command, waiting: three runs are already queued and only the cancelled one is
-    // submitted again.
-    let wait = [FIG5_TINY, &["--executor", "slurm", "--poll", "0.2"]].concat();
-    let out = reproduce(&cluster, &slurm, &wait).output().unwrap();
+    let rest: Vec<String> = lines.map(Result::unwrap).collect();
+    let mut out = child.wait_with_output().unwrap();
+    out.stdout = format!("{head}{}", rest.join("\n")).into_bytes();
     let stdout = succeeded(&out, &cluster);
     assert!(
         stdout.contains("3 run(s) already in the Slurm queue from an earlier submission"),
@@ -154,11 +173,14 @@ fn slurm_fig5_grid_matches_the_local_table_and_resubmits_a_cancelled_task() {
     assert_eq!(stdout.matches("as Slurm job array").count(), 1, "{stdout}");
 
     let table = |root: &Path| fs::read(root.join("table.md")).unwrap();
-    assert_eq!(
-        text(&table(&slurm)),
-        text(&table(&local)),
-        "the cluster's table.md is the local executor's, byte for byte"
+    let (ours, theirs) = (table(&slurm), table(&local));
+    assert!(
+        ours == theirs,
+        "the cluster's table.md is the local executor's, byte for byte:\n{}\n---\n{}",
+        text(&ours),
+        text(&theirs)
     );
+    assert!(text(&ours).contains("| DRPL |"), "{}", text(&ours));
     // Each run's output is beside it, as the local executor leaves it, with a link to Slurm's
     // log of the task that ran it.
     let resubmitted = slurm.join("reaching/drpl/seed1");
