@@ -40,8 +40,9 @@
 //! - [`record`]: the Rerun recording of a session (scene per step, rewards, predicates,
 //!   queries and answers on `step` and `episode` timelines) to an `.rrd` file and/or a live
 //!   viewer, from a logging thread behind a bounded channel.
-//! - [`report`]: the paper's Figures 3 and 5: the run grid and its child processes, aggregation
-//!   over seeds, `table.md`, SVG and PNG figures (aggregation and tables are pure functions).
+//! - [`report`]: the paper's Figures 3 and 5: the run grid, run as child processes here or as
+//!   Slurm job array tasks (one executor trait, two implementations), aggregation over seeds,
+//!   `table.md`, SVG and PNG figures (aggregation and tables are pure functions).
 //! - [`cli`]: the `dualrep` command line: `serve`, `sim`, `train`, `prefs`, `expert`,
 //!   `reproduce`, `bench`, `loadtest`.
 

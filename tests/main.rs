@@ -27,6 +27,7 @@ mod rl_no_alloc;
 mod sac;
 mod sac_no_alloc;
 mod session_recording;
+mod slurm;
 mod store;
 mod tabletop;
 mod train_e2e;

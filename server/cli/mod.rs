@@ -2,6 +2,7 @@
 
 mod bench;
 mod expert;
+mod grid_executor;
 mod loadtest;
 mod output;
 mod overrides;
@@ -37,7 +38,7 @@ pub enum Command {
     Prefs(prefs::PrefsArgs),
     /// Train the SAC expert that the synthetic evaluative trainer consults.
     Expert(expert::ExpertArgs),
-    /// Run the paper's Figure 3 or 5 grid as parallel processes; write table.md and figures.
+    /// Run the paper's Figure 3 or 5 grid here or on Slurm; write table.md and figures.
     Reproduce(reproduce::ReproduceArgs),
     /// Real websocket trainers against a server: answers per second, ack latency, lost answers.
     Loadtest(loadtest::LoadtestArgs),

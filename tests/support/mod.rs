@@ -5,4 +5,5 @@ pub mod cli;
 pub mod counting_alloc;
 pub mod rerun_py;
 pub mod server;
+pub mod slurm_cluster;
 pub mod trainer;
