@@ -3,7 +3,7 @@
 //! runs still queued picked up instead of submitted again, a task cancelled or failed submitted
 //! again by the next run, logs beside the runs, and the same `table.md` as the local executor.
 //!
-//! Needs Debian's `slurmctld`, `slurmd` and `slurm-client` (`.ci/run` installs whichever is
+//! Needs Debian's `slurmctld`, `slurmd` and `slurm-client` (`bash tests/run.sh` installs whichever is
 //! missing). `DUALREP_SKIP_SLURM=1` skips these tests, loudly; without it, missing packages are a
 //! failure.
 

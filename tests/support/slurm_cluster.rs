@@ -82,7 +82,7 @@ impl Cluster {
             }
             panic!(
                 "the Slurm tests need Debian's slurmctld, slurmd and slurm-client; missing: {}.\n\
-                 Install them with `sudo apt-get install -y {}` (`bash .ci/run` installs what is \
+                 Install them with `sudo apt-get install -y {}` (`bash tests/run.sh` installs what is \
                  missing, then runs every test), or set DUALREP_SKIP_SLURM=1 to skip these tests.",
                 missing.join(", "),
                 missing.join(" ")
