@@ -30,7 +30,7 @@ pub const DEFAULT_CHECKPOINT_EVERY: u64 = 5_000;
 pub const DEFAULT_CLIP_FRAMES: usize = 30;
 
 /// Which runs a setting shapes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Family {
     /// SAC, EF-p% and DREF (`dualrep train`, evaluative sessions).
@@ -40,7 +40,7 @@ pub enum Family {
 }
 
 /// SAC's target entropy: SB3's `-dim(A)` ("auto") or a number.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(untagged)]
 pub enum TargetEntropy {
     Auto(AutoWord),
@@ -48,14 +48,14 @@ pub enum TargetEntropy {
 }
 
 /// The word `auto`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum AutoWord {
     Auto,
 }
 
 /// Every setting by name. `None` keeps the default for the run's task and method.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Settings {
     // ---- the session (the server's human and synthetic sessions) -------------------------

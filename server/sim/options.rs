@@ -12,7 +12,7 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 /// The start pose, speed and gripper of Reaching and Placing.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Variant {
     /// The authors' tasks: the robot's home pose with 5 % reset noise, 1.2 cm per step, and
@@ -25,7 +25,7 @@ pub enum Variant {
 }
 
 /// When a released ball counts as placed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum PlacingSuccess {
     /// \[authors\] Released while its centre is over the opening and above the ring: success at
@@ -37,7 +37,7 @@ pub enum PlacingSuccess {
 }
 
 /// What Placing's fourth observation `g` holds.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum GripObservation {
     /// \[authors\] The sign of the last gripper command: -1 if it was "open", else +1.

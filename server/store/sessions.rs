@@ -7,7 +7,7 @@ use sqlx::sqlite::SqliteRow;
 use super::{Result, Store};
 
 /// A session's lifecycle state (`status` in the API and the table).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Status {
     Queued,
