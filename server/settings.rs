@@ -18,7 +18,7 @@ use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::guidance::query_rule::UcbForm;
 use crate::rl::{ActorMix, HumanCriticConfig, SacConfig};
 use crate::scene_graph::SceneGraph;
-use crate::sim::{EnvOptions, GripObservation, PlacingSuccess, Task, Variant};
+use crate::sim::{EnvOptions, GripObservation, PlacingSuccess, Start, Task, Variant};
 
 /// A human session's control rate when the researcher does not set `pace_hz`: the robot's own.
 pub const DEFAULT_PACE_HZ: f64 = 20.0;
@@ -145,6 +145,10 @@ pub struct Settings {
     /// `authors` (home pose, 1.2 cm steps, gradual gripper) or `uniform` (the first version).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub variant: Option<Variant>,
+    /// Where episodes start: `home` (the authors' variant) or `uniform` (anywhere over the
+    /// table; the first version, and DRPL's random trajectories as in the paper).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start: Option<Start>,
     /// Placing: `over` (released over the opening) or `through` (fallen through it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub success: Option<PlacingSuccess>,
@@ -366,6 +370,7 @@ impl Settings {
             reward_scale,
             side_engines_on_a0,
             variant,
+            start,
             success,
             observe_grip,
             release_at,
@@ -457,10 +462,13 @@ impl Settings {
         apply_env(
             &mut config.env,
             task,
-            *variant,
-            *success,
-            *observe_grip,
-            *release_at,
+            EnvSettings {
+                variant: *variant,
+                start: *start,
+                success: *success,
+                observe_grip: *observe_grip,
+                release_at: *release_at,
+            },
         )?;
         Ok(config)
     }
@@ -501,6 +509,7 @@ impl Settings {
             reward_scale,
             side_engines_on_a0,
             variant,
+            start,
             success,
             observe_grip,
             release_at,
@@ -585,10 +594,13 @@ impl Settings {
         apply_env(
             &mut config.env,
             task,
-            *variant,
-            *success,
-            *observe_grip,
-            *release_at,
+            EnvSettings {
+                variant: *variant,
+                start: *start,
+                success: *success,
+                observe_grip: *observe_grip,
+                release_at: *release_at,
+            },
         )?;
         Ok(config)
     }
@@ -597,6 +609,7 @@ impl Settings {
     pub fn env_options(&self, task: Task) -> Result<EnvOptions, String> {
         let env_only = Settings {
             variant: self.variant,
+            start: self.start,
             success: self.success,
             observe_grip: self.observe_grip,
             release_at: self.release_at,
@@ -604,7 +617,7 @@ impl Settings {
         };
         if &env_only != self {
             return Err(
-                "only the task's version can be set here: variant, success, observe_grip, release_at"
+                "only the task's version can be set here: variant, start, success, observe_grip, release_at"
                     .into(),
             );
         }
@@ -612,10 +625,13 @@ impl Settings {
         apply_env(
             &mut options,
             task,
-            self.variant,
-            self.success,
-            self.observe_grip,
-            self.release_at,
+            EnvSettings {
+                variant: self.variant,
+                start: self.start,
+                success: self.success,
+                observe_grip: self.observe_grip,
+                release_at: self.release_at,
+            },
         )?;
         Ok(options)
     }
@@ -666,6 +682,7 @@ impl Settings {
                     reward_scale: Some(c.reward_scale),
                     side_engines_on_a0,
                     variant: table_top.then_some(c.env.variant),
+                    start: table_top.then(|| c.env.start_pose()),
                     success: placing.then(|| c.env.placing_success()),
                     observe_grip: placing.then_some(c.env.observe_grip),
                     release_at: placing.then_some(c.env.release_at),
@@ -687,6 +704,7 @@ impl Settings {
                     samples: Some(c.belief.samples),
                     side_engines_on_a0,
                     variant: table_top.then_some(c.env.variant),
+                    start: table_top.then(|| c.env.start_pose()),
                     success: placing.then(|| c.env.placing_success()),
                     observe_grip: placing.then_some(c.env.observe_grip),
                     release_at: placing.then_some(c.env.release_at),
@@ -749,21 +767,37 @@ fn apply_scene_graph(
     }
 }
 
-fn apply_env(
-    env: &mut EnvOptions,
-    task: Task,
+/// The settings of the task's version, as [`apply_env`] takes them.
+struct EnvSettings {
     variant: Option<Variant>,
+    start: Option<Start>,
     success: Option<PlacingSuccess>,
     observe_grip: Option<GripObservation>,
     release_at: Option<f32>,
-) -> Result<(), String> {
-    if let Some(v) = variant {
+}
+
+fn apply_env(env: &mut EnvOptions, task: Task, given: EnvSettings) -> Result<(), String> {
+    let EnvSettings {
+        variant,
+        start,
+        success,
+        observe_grip,
+        release_at,
+    } = given;
+    let table_top_only = |key: &str| -> Result<(), String> {
         if task == Task::LunarLander {
-            return Err(format!(
-                "variant applies to reaching and placing, not {task}"
-            ));
+            Err(format!("{key} applies to reaching and placing, not {task}"))
+        } else {
+            Ok(())
         }
+    };
+    if let Some(v) = variant {
+        table_top_only("variant")?;
         env.variant = v;
+    }
+    if let Some(s) = start {
+        table_top_only("start")?;
+        env.start = Some(s);
     }
     let placing_only = |key: &str| -> Result<(), String> {
         if task == Task::Placing {

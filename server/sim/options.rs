@@ -24,6 +24,17 @@ pub enum Variant {
     Uniform,
 }
 
+/// Where an episode of Reaching or Placing starts, before its reset moves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Start {
+    /// \[authors\] The robot's home pose.
+    Home,
+    /// Anywhere over the table (the first version's start; the paper's for DRPL's random
+    /// trajectories: "agents starting at random positions and taking random actions").
+    Uniform,
+}
+
 /// When a released ball counts as placed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
@@ -57,6 +68,9 @@ pub const DEFAULT_RELEASE_AT: f32 = 0.88;
 #[serde(default, deny_unknown_fields)]
 pub struct EnvOptions {
     pub variant: Variant,
+    /// Where episodes start; `None` is the variant's own (`home` for the authors' variant,
+    /// `uniform` for the first version).
+    pub start: Option<Start>,
     /// Placing's success rule; `None` is the variant's own (`over` for the authors' variant,
     /// `through` for the uniform one).
     pub success: Option<PlacingSuccess>,
@@ -69,6 +83,7 @@ impl Default for EnvOptions {
     fn default() -> Self {
         Self {
             variant: Variant::Authors,
+            start: None,
             success: None,
             observe_grip: GripObservation::Sign,
             release_at: DEFAULT_RELEASE_AT,
@@ -77,6 +92,14 @@ impl Default for EnvOptions {
 }
 
 impl EnvOptions {
+    /// Where episodes start after the variant's default is applied.
+    pub fn start_pose(&self) -> Start {
+        self.start.unwrap_or(match self.variant {
+            Variant::Authors => Start::Home,
+            Variant::Uniform => Start::Uniform,
+        })
+    }
+
     /// Placing's success rule after the variant's default is applied.
     pub fn placing_success(&self) -> PlacingSuccess {
         self.success.unwrap_or(match self.variant {
