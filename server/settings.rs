@@ -18,7 +18,7 @@ use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::guidance::query_rule::UcbForm;
 use crate::rl::{ActorMix, HumanCriticConfig, SacConfig};
 use crate::scene_graph::SceneGraph;
-use crate::sim::{EnvOptions, GripObservation, PlacingSuccess, Task, Variant};
+use crate::sim::{EnvOptions, GripObservation, PlacingSuccess, Task, TaskRef, Variant};
 
 /// A human session's control rate when the researcher does not set `pace_hz`: the robot's own.
 pub const DEFAULT_PACE_HZ: f64 = 20.0;
@@ -338,7 +338,17 @@ impl Settings {
         method: EvaluativeMethod,
         seed: u64,
     ) -> Result<EvaluativeRunConfig, String> {
-        let mut config = EvaluativeRunConfig::new(task, method, seed);
+        self.apply_evaluative(EvaluativeRunConfig::new(task, method, seed))
+    }
+
+    /// [`Settings::evaluative`] over given defaults (a declared task's, see
+    /// [`EvaluativeRunConfig::declared`]).
+    pub fn apply_evaluative(
+        &self,
+        mut config: EvaluativeRunConfig,
+    ) -> Result<EvaluativeRunConfig, String> {
+        let method = config.method;
+        let task = config.task.clone();
         let Settings {
             pace_hz: _,
             answer_timeout_s: _,
@@ -456,7 +466,7 @@ impl Settings {
         apply_scene_graph(&mut config.scene_graph, *side_engines_on_a0)?;
         apply_env(
             &mut config.env,
-            task,
+            &task,
             *variant,
             *success,
             *observe_grip,
@@ -473,7 +483,17 @@ impl Settings {
         method: QueryMethod,
         seed: u64,
     ) -> Result<PreferenceRunConfig, String> {
-        let mut config = PreferenceRunConfig::new(task, method, seed);
+        self.apply_preference(PreferenceRunConfig::new(task, method, seed))
+    }
+
+    /// [`Settings::preference`] over given defaults (a declared task's, see
+    /// [`PreferenceRunConfig::declared`]).
+    pub fn apply_preference(
+        &self,
+        mut config: PreferenceRunConfig,
+    ) -> Result<PreferenceRunConfig, String> {
+        let method = config.method;
+        let task = config.task.clone();
         let Settings {
             pace_hz: _,
             answer_timeout_s: _,
@@ -584,7 +604,7 @@ impl Settings {
         apply_scene_graph(&mut config.scene_graph, *side_engines_on_a0)?;
         apply_env(
             &mut config.env,
-            task,
+            &task,
             *variant,
             *success,
             *observe_grip,
@@ -611,7 +631,7 @@ impl Settings {
         let mut options = EnvOptions::default();
         apply_env(
             &mut options,
-            task,
+            &task.into(),
             self.variant,
             self.success,
             self.observe_grip,
@@ -751,14 +771,15 @@ fn apply_scene_graph(
 
 fn apply_env(
     env: &mut EnvOptions,
-    task: Task,
+    task: &TaskRef,
     variant: Option<Variant>,
     success: Option<PlacingSuccess>,
     observe_grip: Option<GripObservation>,
     release_at: Option<f32>,
 ) -> Result<(), String> {
+    let builtin = task.builtin();
     if let Some(v) = variant {
-        if task == Task::LunarLander {
+        if !matches!(builtin, Some(Task::Reaching | Task::Placing)) {
             return Err(format!(
                 "variant applies to reaching and placing, not {task}"
             ));
@@ -766,7 +787,7 @@ fn apply_env(
         env.variant = v;
     }
     let placing_only = |key: &str| -> Result<(), String> {
-        if task == Task::Placing {
+        if builtin == Some(Task::Placing) {
             Ok(())
         } else {
             Err(format!("{key} applies to placing only, not {task}"))

@@ -8,6 +8,7 @@ mod output;
 mod overrides;
 mod prefs;
 mod progress;
+mod remote;
 mod reproduce;
 pub mod serve;
 mod sim;

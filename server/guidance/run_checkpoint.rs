@@ -125,6 +125,18 @@ impl EvaluativeRun {
         config: &EvaluativeRunConfig,
         trainer: &mut dyn EvaluativeTrainer,
     ) -> Result<(Self, serde_json::Value), RunCheckpointError> {
+        Self::resume_with_env(bytes, config, None, trainer)
+    }
+
+    /// [`EvaluativeRun::resume`] on `env` when given (an env in another process: connected
+    /// again, it starts the checkpoint's episode from its reset seed), else on a new env of the
+    /// config's task.
+    pub fn resume_with_env(
+        bytes: &[u8],
+        config: &EvaluativeRunConfig,
+        env: Option<Box<dyn crate::sim::Env>>,
+        trainer: &mut dyn EvaluativeTrainer,
+    ) -> Result<(Self, serde_json::Value), RunCheckpointError> {
         let err = |m: String| RunCheckpointError(m);
         let rest = bytes
             .strip_prefix(MAGIC)
@@ -142,9 +154,11 @@ impl EvaluativeRun {
         let episode_seeds: ChaCha8Rng = state.episode_seeds.restore().map_err(err)?;
         trainer.restore_state(&state.trainer).map_err(err)?;
 
-        let mut env = state.config.make_env();
+        let mut env = env.unwrap_or_else(|| state.config.make_env());
         let act_dim = env.spec().action_space.dim();
-        let obs = env.reset(state.episode_seed);
+        let obs = env
+            .try_reset(state.episode_seed)
+            .map_err(|fault| err(format!("resetting the environment: {fault}")))?;
         let run = Self {
             config: state.config,
             env,

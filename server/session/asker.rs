@@ -22,10 +22,10 @@ use super::query::{self, FrameHistory, QueryContent};
 use super::runner::SessionContext;
 
 /// Load an expert written by `dualrep expert` (the synthetic evaluative trainer consults it).
-pub fn load_expert(path: &Path, task: Task) -> Result<Sac, String> {
+pub fn load_expert(path: &Path, task: &str) -> Result<Sac, String> {
     let bytes = std::fs::read(path).map_err(|e| {
         format!(
-            "the synthetic trainer needs an expert at {} ({e}); train one with `dualrep expert --task {task}`",
+            "the synthetic trainer needs an expert at {} ({e}); train one for {task} with `dualrep expert`",
             path.display()
         )
     })?;
@@ -36,7 +36,7 @@ pub fn load_expert(path: &Path, task: Task) -> Result<Sac, String> {
 /// binary ships.
 pub fn load_task_expert(dir: Option<&Path>, task: Task) -> Result<Sac, String> {
     match dir {
-        Some(dir) => load_expert(&dir.join(format!("{task}.safetensors")), task),
+        Some(dir) => load_expert(&dir.join(format!("{task}.safetensors")), task.id()),
         None => {
             let bytes = crate::shipped::expert(task)
                 .ok_or_else(|| format!("this binary ships no expert for {task}"))?;

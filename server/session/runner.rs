@@ -68,7 +68,7 @@ fn run(spec: &SessionSpec, mut ctx: SessionContext) -> Result<Ending, String> {
         RunConfig::Preference(config) => {
             // As `PreferenceRun::new`, but keeping the trajectories to render clips from.
             let trajs = PreferenceRun::record_trajectories(&config);
-            let pool = QueryPool::from_trajectories(config.task, &trajs, config.min_run);
+            let pool = QueryPool::from_trajectories(&config.task, &trajs, config.min_run);
             let run = PreferenceRun::with_pool(config, pool);
             run_preference(spec, run, trajs, ctx, observer)
         }
