@@ -28,6 +28,8 @@ pub const DEFAULT_ANSWER_TIMEOUT_S: f64 = 60.0;
 pub const DEFAULT_CHECKPOINT_EVERY: u64 = 5_000;
 /// Frames of the clip that leads up to an evaluative query (1.5 s at 20 Hz).
 pub const DEFAULT_CLIP_FRAMES: usize = 30;
+/// Seconds a remote env may take to answer one request (a robot's reset included).
+pub const DEFAULT_ENV_TIMEOUT_S: f64 = 30.0;
 
 /// Which runs a setting shapes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -77,6 +79,9 @@ pub struct Settings {
     /// Also stream the session to a running Rerun viewer at this URL.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rerun_connect: Option<String>,
+    /// Seconds a remote env (`env: {"url": ...}`) may take to answer one request [default 30].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub env_timeout_s: Option<f64>,
 
     // ---- SAC (algorithms.md section 1) ---------------------------------------------------
     /// Hidden layer sizes of the actor and every critic, e.g. `[256, 256]` or `"256,256"`.
@@ -218,6 +223,8 @@ pub struct SessionSettings {
     pub record: bool,
     /// Also stream to a running Rerun viewer at this URL (else the server's `--rerun-connect`).
     pub rerun_connect: Option<String>,
+    /// Seconds a remote env may take to answer one request.
+    pub env_timeout_s: f64,
 }
 
 impl Settings {
@@ -301,6 +308,7 @@ impl Settings {
             )? as usize,
             record: self.record.unwrap_or(true),
             rerun_connect: self.rerun_connect.clone(),
+            env_timeout_s: positive("env_timeout_s", self.env_timeout_s, DEFAULT_ENV_TIMEOUT_S)?,
         })
     }
 
@@ -313,6 +321,7 @@ impl Settings {
             clip_frames,
             record,
             rerun_connect,
+            env_timeout_s,
             ..
         } = self;
         [
@@ -322,6 +331,7 @@ impl Settings {
             ("clip_frames", clip_frames.is_some()),
             ("record", record.is_some()),
             ("rerun_connect", rerun_connect.is_some()),
+            ("env_timeout_s", env_timeout_s.is_some()),
         ]
         .into_iter()
         .filter(|(_, set)| *set)
@@ -356,6 +366,7 @@ impl Settings {
             clip_frames: _,
             record: _,
             rerun_connect: _,
+            env_timeout_s: _,
             hidden,
             learning_rate,
             batch_size,
@@ -501,6 +512,7 @@ impl Settings {
             clip_frames: _,
             record: _,
             rerun_connect: _,
+            env_timeout_s: _,
             hidden,
             learning_rate,
             batch_size,
@@ -649,6 +661,7 @@ impl Settings {
             checkpoint_every: Some(DEFAULT_CHECKPOINT_EVERY),
             clip_frames: Some(DEFAULT_CLIP_FRAMES),
             record: Some(true),
+            env_timeout_s: Some(DEFAULT_ENV_TIMEOUT_S),
             ..Settings::default()
         };
         let table_top = task != Task::LunarLander;

@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 use super::AppState;
 use super::auth::SessionAccess;
 use super::error::{ApiError, ApiResult};
+use crate::remote_env::RemoteTarget;
 use crate::session::spec::DEFAULT_QUERIES;
 use crate::session::{SessionMethod, SessionSpec, TrainerKind};
 use crate::settings::Settings;
@@ -20,7 +21,14 @@ use crate::store::{AnswerCounts, SessionRow, Status, Survey};
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LaunchRequest {
-    pub task: Task,
+    /// A built-in task; with `env`, the task that env stands in for (its scene graph,
+    /// features and expert). Give a task, an env, or both.
+    #[serde(default)]
+    pub task: Option<Task>,
+    /// An environment in another process (`{"url": "tcp://HOST:PORT"}`, see
+    /// `docs/env-protocol.md`) instead of our simulator.
+    #[serde(default)]
+    pub env: Option<RemoteTarget>,
     pub method: SessionMethod,
     pub trainer: TrainerKind,
     #[serde(default)]
@@ -60,12 +68,13 @@ impl LaunchRequest {
                 )));
             }
             self.steps.unwrap_or(match self.task {
-                Task::LunarLander => 150_000,
-                Task::Reaching | Task::Placing => 100_000,
+                Some(Task::LunarLander) => 150_000,
+                Some(Task::Reaching | Task::Placing) | None => 100_000,
             })
         };
         Ok(SessionSpec {
             task: self.task,
+            env: self.env,
             method: self.method,
             trainer: self.trainer,
             seed: self.seed,

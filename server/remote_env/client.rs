@@ -145,12 +145,6 @@ impl RemoteEnv {
         &self.description
     }
 
-    /// Ask for a rendered frame with every reset and step (when the env can render): for
-    /// sessions people watch. Off by default, since a frame costs the env more than a step.
-    pub fn set_frames(&mut self, on: bool) {
-        self.frames = on && self.description.render;
-    }
-
     /// Say goodbye (best effort) and close.
     pub fn close(mut self) {
         if self.broken.is_none() {
@@ -432,6 +426,12 @@ impl Env for RemoteEnv {
 
     fn reported_features(&self) -> Option<&[f64]> {
         (!self.description.features.is_empty()).then_some(self.features.as_slice())
+    }
+
+    /// Frames with every reset and step while on (and the env can render): for sessions people
+    /// watch. Off by default.
+    fn set_frames(&mut self, on: bool) {
+        self.frames = on && self.description.render;
     }
 }
 

@@ -251,6 +251,11 @@ pub trait Env: Send {
     fn reported_features(&self) -> Option<&[f64]> {
         None
     }
+
+    /// Render with every later reset and step (`render` then shows it): an env that sends
+    /// images from another process does so only while asked, since a frame costs it more than
+    /// a step. The built-in tasks' render states cost nothing, and they ignore this.
+    fn set_frames(&mut self, _on: bool) {}
 }
 
 /// Serde defaults for render files written before the gradual gripper existed.
