@@ -12,7 +12,7 @@ from .env.adapter import predicates
     upright="pendulum upright",
     right_side="pendulum on the right",
     fast="spinning fast",
-    pushing_right="pushing clockwise",
+    clockwise="pushing clockwise",
 )
 def pendulum(obs: Any, action: Any, info: Mapping[str, Any]) -> Dict[str, bool]:
     """Pendulum-v1: obs = (cos theta, sin theta, angular velocity)."""
@@ -20,7 +20,7 @@ def pendulum(obs: Any, action: Any, info: Mapping[str, Any]) -> Dict[str, bool]:
         "upright": obs[0] > 0.9,
         "right_side": obs[1] < 0.0,
         "fast": abs(obs[2]) > 4.0,
-        "pushing_right": action is not None and float(action[0]) < 0.0,
+        "clockwise": action is not None and float(action[0]) < 0.0,
     }
 
 
