@@ -88,7 +88,11 @@ impl LaunchRequest {
 #[derive(Debug, Serialize)]
 pub struct SessionView {
     pub id: String,
+    /// The task (`remote`: a remote env's own task).
     pub task: String,
+    /// The remote env the session steps (`{"url": ...}`), if not our simulator.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub env: Option<serde_json::Value>,
     pub method: String,
     pub trainer: String,
     pub seed: i64,
@@ -134,6 +138,7 @@ async fn view(state: &AppState, row: SessionRow) -> ApiResult<SessionView> {
         unit: row.spec().map_or("steps", |s| s.method.budget_unit()),
         trainer_url: trainer_url(&row),
         params: row.config.get("params").cloned().unwrap_or_default(),
+        env: row.config.get("env").cloned(),
         id: row.id,
         task: row.task,
         method: row.method,

@@ -409,6 +409,7 @@ impl Env for RemoteEnv {
     fn geometry(&self) -> Geometry {
         Geometry::Remote {
             env: self.description.spec.id.to_string(),
+            frame_size: self.frame.as_ref().map(|f| [f.width, f.height]),
         }
     }
 

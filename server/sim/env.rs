@@ -147,6 +147,9 @@ pub enum Geometry {
     Remote {
         /// The id it declared (`LunarLanderContinuous-v3`, `my-robot`).
         env: String,
+        /// Width and height of its frames (the episode's first), when it sends frames.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        frame_size: Option<[u32; 2]>,
     },
     LunarLander {
         /// World size in units (20 x 13.333).

@@ -25,6 +25,24 @@ class ApiError(Exception):
         self.message = message
 
 
+def _object(value: Any) -> Dict[str, Any]:
+    if not isinstance(value, dict):
+        raise ApiError(200, "unexpected_reply", f"expected a JSON object, got {value!r:.200}")
+    return value
+
+
+def _objects(value: Any) -> List[Dict[str, Any]]:
+    if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+        raise ApiError(200, "unexpected_reply", f"expected a list of JSON objects, got {value!r:.200}")
+    return value
+
+
+def _text(value: Any) -> str:
+    if not isinstance(value, str):
+        raise ApiError(200, "unexpected_reply", f"expected text, got {value!r:.200}")
+    return value
+
+
 class Client:
     """``Client("http://127.0.0.1:8080", token)``: the researcher's token (``data/token``)."""
 
@@ -86,33 +104,33 @@ class Client:
             body["queries"] = queries
         if params:
             body["params"] = dict(params)
-        return self.request("POST", "/api/sessions", body)
+        return _object(self.request("POST", "/api/sessions", body))
 
     def sessions(self) -> List[Dict[str, Any]]:
-        return self.request("GET", "/api/sessions")
+        return _objects(self.request("GET", "/api/sessions"))
 
     def session(self, session_id: str) -> Dict[str, Any]:
-        return self.request("GET", f"/api/sessions/{session_id}")
+        return _object(self.request("GET", f"/api/sessions/{session_id}"))
 
     def stop(self, session_id: str) -> Dict[str, Any]:
-        return self.request("POST", f"/api/sessions/{session_id}/stop")
+        return _object(self.request("POST", f"/api/sessions/{session_id}/stop"))
 
     def resume(self, session_id: str) -> Dict[str, Any]:
-        return self.request("POST", f"/api/sessions/{session_id}/resume")
+        return _object(self.request("POST", f"/api/sessions/{session_id}/resume"))
 
     def answers(self, session_id: str) -> List[Dict[str, Any]]:
-        return self.request("GET", f"/api/sessions/{session_id}/answers")
+        return _objects(self.request("GET", f"/api/sessions/{session_id}/answers"))
 
     def episodes(self, session_id: str) -> List[Dict[str, Any]]:
-        return self.request("GET", f"/api/sessions/{session_id}/episodes")
+        return _objects(self.request("GET", f"/api/sessions/{session_id}/episodes"))
 
     def alignment(self, session_id: str) -> List[Dict[str, Any]]:
-        return self.request("GET", f"/api/sessions/{session_id}/alignment")
+        return _objects(self.request("GET", f"/api/sessions/{session_id}/alignment"))
 
     def export(self, session_id: str, format: str = "jsonl") -> str:
         """The session's export: JSONL (the session, every answer and episode) or CSV."""
         query = urllib.parse.urlencode({"format": format})
-        return self.request("GET", f"/api/sessions/{session_id}/export?{query}")
+        return _text(self.request("GET", f"/api/sessions/{session_id}/export?{query}"))
 
     def export_records(self, session_id: str) -> List[Dict[str, Any]]:
         """The JSONL export, parsed: one dict per line, ``record`` naming its kind."""

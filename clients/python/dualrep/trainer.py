@@ -12,7 +12,7 @@ import json
 import time
 import urllib.parse
 from dataclasses import dataclass, field
-from typing import Any, Callable, Dict, List, Mapping, Optional, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Set, Union
 
 from websockets.sync.client import ClientConnection, connect
 
@@ -42,7 +42,9 @@ class Trainer:
 
     def __init__(self, url: str, open_timeout: float = 10.0) -> None:
         self.url = url
-        self.ws: ClientConnection = connect(url, open_timeout=open_timeout, max_size=64 << 20)
+        # `connect(...)` is the connection itself up to websockets 17.0 and a context manager
+        # that opens it from 17.1 on; entering it gives the connection in both.
+        self.ws: ClientConnection = connect(url, open_timeout=open_timeout, max_size=64 << 20).__enter__()
         self.hello: Dict[str, Any] = self._receive(open_timeout) or {}
 
     @classmethod
@@ -56,7 +58,10 @@ class Trainer:
             text = self.ws.recv(timeout=timeout)
         except TimeoutError:
             return None
-        return json.loads(text)
+        message = json.loads(text)
+        if not isinstance(message, dict):
+            raise ValueError(f"the server sent {message!r:.200}, not a JSON object")
+        return message
 
     def answer(self, query_id: int, value: Answer) -> None:
         self.ws.send(json.dumps({"type": "answer", "id": query_id, "value": value}))
@@ -68,7 +73,7 @@ class Trainer:
         """Answer every query with ``answer`` until the session ends (or ``timeout`` seconds
         pass with nothing from the server); what was acknowledged, and how it ended."""
         result = Result(status="running", reason=None)
-        asked: set = set()
+        asked: Set[int] = set()
         while True:
             message = self._receive(timeout)
             if message is None:

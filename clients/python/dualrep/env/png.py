@@ -19,6 +19,7 @@ def _chunk(kind: bytes, data: bytes) -> bytes:
 def encode_png(pixels: Any, level: int = 3) -> Tuple[bytes, int, int]:
     """PNG bytes, width and height of ``pixels``: an ``H x W x 3`` (RGB) or ``H x W x 4``
     (RGBA) array of uint8 (NumPy, or nested sequences), or ``H x W`` grey."""
+    np: Any
     try:
         import numpy as np
     except ImportError:  # pragma: no cover - Gymnasium brings NumPy

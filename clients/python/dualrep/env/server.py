@@ -13,7 +13,7 @@ import socketserver
 import sys
 import threading
 import traceback
-from typing import Any, Callable, Mapping, Optional, Tuple, Union
+from typing import Any, Callable, Dict, Mapping, Optional, Tuple, Union
 
 from .adapter import (
     Declared,
@@ -79,7 +79,7 @@ class Connection:
                 self.server.log(f"{kind} failed: {traceback.format_exc(limit=3)}")
                 self._send({"type": "error", "message": f"{kind} failed: {type(e).__name__}: {e}"})
 
-    def _send(self, message: dict, attachment: Optional[bytes] = None) -> None:
+    def _send(self, message: Dict[str, Any], attachment: Optional[bytes] = None) -> None:
         write_message(self.wfile, message, attachment)
 
     def _hello(self, request: Mapping[str, Any]) -> None:
@@ -100,7 +100,7 @@ class Connection:
         }
         self._send({"type": "hello", "protocol": PROTOCOL, "env": env})
 
-    def _frame(self, render: bool) -> Tuple[Optional[dict], Optional[bytes]]:
+    def _frame(self, render: bool) -> Tuple[Optional[Dict[str, Any]], Optional[bytes]]:
         if not render:
             return None, None
         if not self.declared.render:
@@ -113,7 +113,7 @@ class Connection:
         result = self.env.reset(seed=int(seed) if seed is not None else None)
         obs, info = result if isinstance(result, tuple) and len(result) == 2 else (result, {})
         self.in_episode = True
-        reply = {
+        reply: Dict[str, Any] = {
             "type": "reset",
             "obs": flat(obs),
             "holding": holding(self.server.predicate_fn, self.declared, obs, None, info or {}),
@@ -141,7 +141,7 @@ class Connection:
         obs, reward, terminated, truncated, info = self.env.step(action)
         info = info or {}
         terminated, truncated = bool(terminated), bool(truncated)
-        reply: dict = {
+        reply: Dict[str, Any] = {
             "type": "step",
             "obs": flat(obs),
             "reward": float(reward),
@@ -227,11 +227,11 @@ class EnvServer:
         if isinstance(env, str):
             self._factory: Optional[EnvFactory] = _gym_factory(env, render, gym_kwargs or {})
             self.overrides["env_id"] = env_id or env
+        elif isinstance(env, type) or (callable(env) and not hasattr(env, "step")):
+            self._factory = env  # a class or a function: a new env per connection
         elif hasattr(env, "reset") and hasattr(env, "step"):
             self._factory = None
             self._shared = env
-        elif callable(env):
-            self._factory = env
         else:
             raise TypeError("env must be a Gymnasium id, a factory, or an object with reset and step")
         # Read the description once now, so that a bad env fails here, not on a connection.
