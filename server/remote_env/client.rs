@@ -455,3 +455,7 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+#[path = "client_tests.rs"]
+mod fault_tests;
