@@ -155,19 +155,25 @@ pub fn document() -> Value {
             "schemas": {
                 "Status": {"type": "string", "enum": ["queued", "running", "waiting", "finished", "failed", "stopped", "interrupted"]},
                 "LaunchRequest": {
-                    "type": "object", "required": ["task", "method", "trainer"], "additionalProperties": false,
+                    "type": "object", "required": ["method", "trainer"], "additionalProperties": false,
+                    "description": "Give a task, an env, or both (the env then stands in for the task)",
                     "properties": {
                         "task": {"type": "string", "enum": ["reaching", "placing", "lunar-lander"]},
+                        "env": {"type": "object", "required": ["url"], "additionalProperties": false,
+                            "description": "An environment in another process (docs/env-protocol.md)",
+                            "properties": {"url": {"type": "string", "description": "tcp://HOST:PORT"}}},
                         "method": {"type": "string", "description": "dref, ef-<percent>, sac, drpl, drpl-ss, fragment or full"},
                         "trainer": {"type": "string", "enum": ["human", "synthetic"]},
                         "seed": {"type": "integer", "minimum": 0, "default": 0},
                         "steps": {"type": "integer", "minimum": 1, "description": "Evaluative methods: environment steps"},
                         "queries": {"type": "integer", "minimum": 1, "description": "Preference methods: queries", "default": 40},
-                        "params": {"type": "object", "description": "pace_hz (20), answer_timeout_s (60), checkpoint_every (5000), clip_frames (30), and any hyper-parameter by name"}
+                        "params": {"type": "object", "description": "pace_hz (20), answer_timeout_s (60), checkpoint_every (5000), clip_frames (30), env_timeout_s (30), and any hyper-parameter by name"}
                     }
                 },
                 "Session": {"type": "object", "properties": {
-                    "id": {"type": "string"}, "task": {"type": "string"}, "method": {"type": "string"}, "trainer": {"type": "string"},
+                    "id": {"type": "string"}, "task": {"type": "string", "description": "remote: a remote env's own task"},
+                    "env": {"type": "object", "properties": {"url": {"type": "string"}}},
+                    "method": {"type": "string"}, "trainer": {"type": "string"},
                     "seed": {"type": "integer"}, "budget": {"type": "integer"}, "unit": {"type": "string", "enum": ["steps", "queries"]},
                     "status": {"$ref": "#/components/schemas/Status"}, "reason": {"type": "string"},
                     "progress": {"type": "integer"}, "params": {"type": "object"},
