@@ -145,6 +145,12 @@ impl EvaluativeRun {
         let (learner, rows) = split_blob(rest).ok_or_else(|| err("truncated learner".into()))?;
         let state: RunState =
             serde_json::from_slice(state).map_err(|e| err(format!("state: {e}")))?;
+        if (&state.config.task, state.config.scene_graph) != (&config.task, config.scene_graph) {
+            // A remote env that describes itself otherwise than when the run began.
+            return Err(err(
+                "the task or its scene graph is not the one the run was saved with (an env in another process that now declares other predicates, features or sizes?)".into(),
+            ));
+        }
         if state.config != *config {
             return Err(err("it belongs to a run with another configuration".into()));
         }
@@ -295,6 +301,10 @@ mod tests {
                 .to_string()
         };
         assert!(refused(&bytes, &other, &mut trainer).contains("another configuration"));
+        // A remote env that comes back declaring another scene graph.
+        let mut redeclared = config.clone();
+        redeclared.scene_graph = crate::scene_graph::SceneGraph::Reaching;
+        assert!(refused(&bytes, &redeclared, &mut trainer).contains("scene graph"));
         assert!(refused(&bytes[..bytes.len() - 4], &config, &mut trainer).contains("replay"));
         assert!(refused(&bytes[..40], &config, &mut trainer).contains("truncated"));
         assert!(refused(b"hello", &config, &mut trainer).contains("not a dualrep"));

@@ -10,6 +10,7 @@ use super::spec::{SessionSpec, TrainerKind};
 use crate::guidance::drpl::pool::QueryPool;
 use crate::guidance::drpl::run::{PreferenceRun, PreferenceRunConfig};
 use crate::guidance::drpl::trainer::{Preference, SyntheticOracle};
+use crate::guidance::drpl::trajectories::Trajectory;
 use crate::guidance::drpl::trajectory_bytes;
 use crate::sim::TaskRef;
 
@@ -68,17 +69,13 @@ pub(super) fn run(
                 ..
             } = r;
             let (trajectories, recorded) = match resume_from {
-                Some(bytes) => (
-                    trajectory_bytes::from_bytes(&bytes)
-                        .map_err(|e| format!("reading the recorded trajectories: {e}"))?,
-                    None,
-                ),
+                Some(bytes) => (kept_trajectories(&bytes, &config)?, None),
                 None => {
                     env.set_frames(false);
                     let trajs =
                         PreferenceRun::record_trajectories_on(&config, env.as_mut(), &mut |_| {})
                             .map_err(|e| format!("recording the trajectories: {e}"))?;
-                    let bytes = trajectory_bytes::to_bytes(&trajs);
+                    let bytes = keep_trajectories(&trajs, &config);
                     (trajs, Some(bytes))
                 }
             };
@@ -115,6 +112,39 @@ pub(super) fn run(
         }
     };
     drive(spec, run, PreferenceAsker { asker, comparer }, verify)
+}
+
+/// The recorded trajectories with the run's config before them (a u64 LE length, the config as
+/// JSON), so that a resume on an env that now declares something else is refused.
+fn keep_trajectories(trajectories: &[Trajectory], config: &PreferenceRunConfig) -> Vec<u8> {
+    let head = serde_json::to_vec(config).expect("configs serialise");
+    let mut bytes = (head.len() as u64).to_le_bytes().to_vec();
+    bytes.extend_from_slice(&head);
+    bytes.extend_from_slice(&trajectory_bytes::to_bytes(trajectories));
+    bytes
+}
+
+fn kept_trajectories(
+    bytes: &[u8],
+    config: &PreferenceRunConfig,
+) -> Result<Vec<Trajectory>, String> {
+    let bad = |e: &str| format!("reading the recorded trajectories: {e}");
+    let (len, rest) = bytes
+        .split_first_chunk::<8>()
+        .ok_or_else(|| bad("cut short"))?;
+    let len = usize::try_from(u64::from_le_bytes(*len)).map_err(|_| bad("cut short"))?;
+    if rest.len() < len {
+        return Err(bad("cut short"));
+    }
+    let (head, trajectories) = rest.split_at(len);
+    let saved: PreferenceRunConfig =
+        serde_json::from_slice(head).map_err(|e| bad(&e.to_string()))?;
+    if saved != *config {
+        return Err(
+            "the env does not describe itself as when the session recorded its trajectories (other predicates, features or sizes?)".into(),
+        );
+    }
+    trajectory_bytes::from_bytes(trajectories).map_err(|e| bad(&e))
 }
 
 fn drive(
