@@ -26,8 +26,12 @@ use super::runner::SessionContext;
 /// Load an expert written by `dualrep expert` (the synthetic evaluative trainer consults it).
 pub fn load_expert(path: &Path, task: &str) -> Result<Sac, String> {
     let bytes = std::fs::read(path).map_err(|e| {
+        let how = match task.parse::<Task>() {
+            Ok(t) => format!("`dualrep expert --task {t}`"),
+            Err(_) => format!("`dualrep expert --env-url URL` on {task}"),
+        };
         format!(
-            "the synthetic trainer needs an expert at {} ({e}); train one for {task} with `dualrep expert`",
+            "the synthetic trainer needs an expert at {} ({e}); train one with {how}",
             path.display()
         )
     })?;
