@@ -24,7 +24,8 @@
 //!   requests, `--set`/TOML, `GET /api/tasks` and the dashboard; validated once.
 //! - [`session`]: one training session as a plain loop on its own thread, talking to the
 //!   server only through channels; pacing, queries to people, replay of stored answers on
-//!   resume, checkpoints. No async runtime, no database.
+//!   resume (on a remote env, which cannot replay, its latest whole-run checkpoint instead),
+//!   checkpoints. No async runtime, no database.
 //!
 //! The edge (files, processes, network, database):
 //!
