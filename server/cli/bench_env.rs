@@ -29,6 +29,9 @@ pub struct EnvBenchArgs {
     /// Timed steps per env.
     #[arg(long, default_value_t = 20_000)]
     pub steps: u64,
+    /// Time only the remote envs (a caller measuring CPU time per env runs them apart).
+    #[arg(long)]
+    pub skip_in_process: bool,
 }
 
 /// One env's timing.
@@ -44,7 +47,8 @@ struct Timing {
 #[derive(Serialize)]
 struct EnvBench {
     task: Task,
-    in_process: Timing,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    in_process: Option<Timing>,
     #[serde(skip_serializing_if = "Option::is_none")]
     remote: Option<Timing>,
     /// In-process steps per second over remote ones.
@@ -96,8 +100,10 @@ pub fn bench_env(args: EnvBenchArgs) -> anyhow::Result<()> {
     if args.steps == 0 {
         bail!("--steps must be at least 1");
     }
-    let mut ours = args.task.make_env();
-    let in_process = time_env(ours.as_mut(), args.steps)?;
+    let in_process = match args.skip_in_process {
+        true => None,
+        false => Some(time_env(args.task.make_env().as_mut(), args.steps)?),
+    };
     let remote = match &args.env_url {
         Some(url) => Some(time_remote(url, Some(args.task), args.steps)?),
         None => None,
@@ -110,7 +116,8 @@ pub fn bench_env(args: EnvBenchArgs) -> anyhow::Result<()> {
         task: args.task,
         in_process_over_remote: remote
             .as_ref()
-            .map(|r| in_process.steps_per_second / r.steps_per_second),
+            .zip(in_process.as_ref())
+            .map(|(r, i)| i.steps_per_second / r.steps_per_second),
         in_process,
         remote,
         null_remote,
