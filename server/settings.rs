@@ -18,7 +18,7 @@ use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::guidance::query_rule::UcbForm;
 use crate::rl::{ActorMix, HumanCriticConfig, SacConfig};
 use crate::scene_graph::SceneGraph;
-use crate::sim::{EnvOptions, GripObservation, PlacingSuccess, Task, TaskRef, Variant};
+use crate::sim::{EnvOptions, GripObservation, PlacingSuccess, Start, Task, TaskRef, Variant};
 
 /// A human session's control rate when the researcher does not set `pace_hz`: the robot's own.
 pub const DEFAULT_PACE_HZ: f64 = 20.0;
@@ -32,7 +32,7 @@ pub const DEFAULT_CLIP_FRAMES: usize = 30;
 pub const DEFAULT_ENV_TIMEOUT_S: f64 = 30.0;
 
 /// Which runs a setting shapes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Family {
     /// SAC, EF-p% and DREF (`dualrep train`, evaluative sessions).
@@ -42,7 +42,7 @@ pub enum Family {
 }
 
 /// SAC's target entropy: SB3's `-dim(A)` ("auto") or a number.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(untagged)]
 pub enum TargetEntropy {
     Auto(AutoWord),
@@ -50,14 +50,14 @@ pub enum TargetEntropy {
 }
 
 /// The word `auto`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum AutoWord {
     Auto,
 }
 
 /// Every setting by name. `None` keeps the default for the run's task and method.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Settings {
     // ---- the session (the server's human and synthetic sessions) -------------------------
@@ -150,6 +150,10 @@ pub struct Settings {
     /// `authors` (home pose, 1.2 cm steps, gradual gripper) or `uniform` (the first version).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub variant: Option<Variant>,
+    /// Where episodes start: `home` (the authors' variant) or `uniform` (anywhere over the
+    /// table; the first version, and DRPL's random trajectories as in the paper).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start: Option<Start>,
     /// Placing: `over` (released over the opening) or `through` (fallen through it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub success: Option<PlacingSuccess>,
@@ -387,6 +391,7 @@ impl Settings {
             reward_scale,
             side_engines_on_a0,
             variant,
+            start,
             success,
             observe_grip,
             release_at,
@@ -478,10 +483,13 @@ impl Settings {
         apply_env(
             &mut config.env,
             &task,
-            *variant,
-            *success,
-            *observe_grip,
-            *release_at,
+            EnvSettings {
+                variant: *variant,
+                start: *start,
+                success: *success,
+                observe_grip: *observe_grip,
+                release_at: *release_at,
+            },
         )?;
         Ok(config)
     }
@@ -533,6 +541,7 @@ impl Settings {
             reward_scale,
             side_engines_on_a0,
             variant,
+            start,
             success,
             observe_grip,
             release_at,
@@ -617,10 +626,13 @@ impl Settings {
         apply_env(
             &mut config.env,
             &task,
-            *variant,
-            *success,
-            *observe_grip,
-            *release_at,
+            EnvSettings {
+                variant: *variant,
+                start: *start,
+                success: *success,
+                observe_grip: *observe_grip,
+                release_at: *release_at,
+            },
         )?;
         Ok(config)
     }
@@ -629,6 +641,7 @@ impl Settings {
     pub fn env_options(&self, task: Task) -> Result<EnvOptions, String> {
         let env_only = Settings {
             variant: self.variant,
+            start: self.start,
             success: self.success,
             observe_grip: self.observe_grip,
             release_at: self.release_at,
@@ -636,7 +649,7 @@ impl Settings {
         };
         if &env_only != self {
             return Err(
-                "only the task's version can be set here: variant, success, observe_grip, release_at"
+                "only the task's version can be set here: variant, start, success, observe_grip, release_at"
                     .into(),
             );
         }
@@ -644,10 +657,13 @@ impl Settings {
         apply_env(
             &mut options,
             &task.into(),
-            self.variant,
-            self.success,
-            self.observe_grip,
-            self.release_at,
+            EnvSettings {
+                variant: self.variant,
+                start: self.start,
+                success: self.success,
+                observe_grip: self.observe_grip,
+                release_at: self.release_at,
+            },
         )?;
         Ok(options)
     }
@@ -699,6 +715,7 @@ impl Settings {
                     reward_scale: Some(c.reward_scale),
                     side_engines_on_a0,
                     variant: table_top.then_some(c.env.variant),
+                    start: table_top.then(|| c.env.start_pose()),
                     success: placing.then(|| c.env.placing_success()),
                     observe_grip: placing.then_some(c.env.observe_grip),
                     release_at: placing.then_some(c.env.release_at),
@@ -720,6 +737,7 @@ impl Settings {
                     samples: Some(c.belief.samples),
                     side_engines_on_a0,
                     variant: table_top.then_some(c.env.variant),
+                    start: table_top.then(|| c.env.start_pose()),
                     success: placing.then(|| c.env.placing_success()),
                     observe_grip: placing.then_some(c.env.observe_grip),
                     release_at: placing.then_some(c.env.release_at),
@@ -782,22 +800,38 @@ fn apply_scene_graph(
     }
 }
 
-fn apply_env(
-    env: &mut EnvOptions,
-    task: &TaskRef,
+/// The settings of the task's version, as [`apply_env`] takes them.
+struct EnvSettings {
     variant: Option<Variant>,
+    start: Option<Start>,
     success: Option<PlacingSuccess>,
     observe_grip: Option<GripObservation>,
     release_at: Option<f32>,
-) -> Result<(), String> {
+}
+
+fn apply_env(env: &mut EnvOptions, task: &TaskRef, given: EnvSettings) -> Result<(), String> {
     let builtin = task.builtin();
-    if let Some(v) = variant {
+    let EnvSettings {
+        variant,
+        start,
+        success,
+        observe_grip,
+        release_at,
+    } = given;
+    let table_top_only = |key: &str| -> Result<(), String> {
         if !matches!(builtin, Some(Task::Reaching | Task::Placing)) {
-            return Err(format!(
-                "variant applies to reaching and placing, not {task}"
-            ));
+            Err(format!("{key} applies to reaching and placing, not {task}"))
+        } else {
+            Ok(())
         }
+    };
+    if let Some(v) = variant {
+        table_top_only("variant")?;
         env.variant = v;
+    }
+    if let Some(s) = start {
+        table_top_only("start")?;
+        env.start = Some(s);
     }
     let placing_only = |key: &str| -> Result<(), String> {
         if builtin == Some(Task::Placing) {

@@ -8,11 +8,13 @@ use serde::{Deserialize, Serialize};
 use super::client::{RemoteEnv, Timeouts};
 use crate::sim::{EnvFault, Task};
 
-/// An environment in another process, as a launch request and a stored session name it.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+/// An environment in another process (`docs/env-protocol.md`), as a launch request and a
+/// stored session name it.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RemoteTarget {
     /// `tcp://HOST:PORT` of a server speaking `docs/env-protocol.md`.
+    #[schema(example = "tcp://127.0.0.1:5555")]
     pub url: String,
 }
 

@@ -24,5 +24,7 @@ pub use env::{
     BoxSpace, Cuboid, Env, EnvFault, EnvSpec, Geometry, Outcome, Pose2, Pose3, RenderState, Step,
 };
 pub use frame::{ImageFrame, MediaType};
-pub use options::{DEFAULT_RELEASE_AT, EnvOptions, GripObservation, PlacingSuccess, Variant};
+pub use options::{
+    DEFAULT_RELEASE_AT, EnvOptions, GripObservation, PlacingSuccess, Start, Variant,
+};
 pub use task::{DeclaredTask, Task, TaskRef, UnknownTask};
