@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use crate::scene_graph::Predicate;
 pub use crate::session::{AnswerValue, Answerer, QueryKind};
 use crate::session::{Frame, QueryContent};
-use crate::sim::{Geometry, Task};
+use crate::sim::Geometry;
 use crate::store::Status;
 
 /// A query's id on the wire: the session's own query number (0 for its first query), the
@@ -24,7 +24,8 @@ pub enum ServerMessage {
     /// First message on every connection.
     Hello {
         session: String,
-        task: Task,
+        /// `reaching`, `placing`, `lunar-lander`, or `remote` (a remote env's own task).
+        task: &'static str,
         method: String,
         /// Which answers this session takes.
         kind: QueryKind,

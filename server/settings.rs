@@ -18,7 +18,7 @@ use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::guidance::query_rule::UcbForm;
 use crate::rl::{ActorMix, HumanCriticConfig, SacConfig};
 use crate::scene_graph::SceneGraph;
-use crate::sim::{EnvOptions, GripObservation, PlacingSuccess, Start, Task, Variant};
+use crate::sim::{EnvOptions, GripObservation, PlacingSuccess, Start, Task, TaskRef, Variant};
 
 /// A human session's control rate when the researcher does not set `pace_hz`: the robot's own.
 pub const DEFAULT_PACE_HZ: f64 = 20.0;
@@ -28,6 +28,8 @@ pub const DEFAULT_ANSWER_TIMEOUT_S: f64 = 60.0;
 pub const DEFAULT_CHECKPOINT_EVERY: u64 = 5_000;
 /// Frames of the clip that leads up to an evaluative query (1.5 s at 20 Hz).
 pub const DEFAULT_CLIP_FRAMES: usize = 30;
+/// Seconds a remote env may take to answer one request (a robot's reset included).
+pub const DEFAULT_ENV_TIMEOUT_S: f64 = 30.0;
 
 /// Which runs a setting shapes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
@@ -77,6 +79,9 @@ pub struct Settings {
     /// Also stream the session to a running Rerun viewer at this URL.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rerun_connect: Option<String>,
+    /// Seconds a remote env (`env: {"url": ...}`) may take to answer one request [default 30].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub env_timeout_s: Option<f64>,
 
     // ---- SAC (algorithms.md section 1) ---------------------------------------------------
     /// Hidden layer sizes of the actor and every critic, e.g. `[256, 256]` or `"256,256"`.
@@ -222,6 +227,8 @@ pub struct SessionSettings {
     pub record: bool,
     /// Also stream to a running Rerun viewer at this URL (else the server's `--rerun-connect`).
     pub rerun_connect: Option<String>,
+    /// Seconds a remote env may take to answer one request.
+    pub env_timeout_s: f64,
 }
 
 impl Settings {
@@ -305,6 +312,7 @@ impl Settings {
             )? as usize,
             record: self.record.unwrap_or(true),
             rerun_connect: self.rerun_connect.clone(),
+            env_timeout_s: positive("env_timeout_s", self.env_timeout_s, DEFAULT_ENV_TIMEOUT_S)?,
         })
     }
 
@@ -317,6 +325,7 @@ impl Settings {
             clip_frames,
             record,
             rerun_connect,
+            env_timeout_s,
             ..
         } = self;
         [
@@ -326,6 +335,7 @@ impl Settings {
             ("clip_frames", clip_frames.is_some()),
             ("record", record.is_some()),
             ("rerun_connect", rerun_connect.is_some()),
+            ("env_timeout_s", env_timeout_s.is_some()),
         ]
         .into_iter()
         .filter(|(_, set)| *set)
@@ -342,7 +352,17 @@ impl Settings {
         method: EvaluativeMethod,
         seed: u64,
     ) -> Result<EvaluativeRunConfig, String> {
-        let mut config = EvaluativeRunConfig::new(task, method, seed);
+        self.apply_evaluative(EvaluativeRunConfig::new(task, method, seed))
+    }
+
+    /// [`Settings::evaluative`] over given defaults (a declared task's, see
+    /// [`EvaluativeRunConfig::declared`]).
+    pub fn apply_evaluative(
+        &self,
+        mut config: EvaluativeRunConfig,
+    ) -> Result<EvaluativeRunConfig, String> {
+        let method = config.method;
+        let task = config.task.clone();
         let Settings {
             pace_hz: _,
             answer_timeout_s: _,
@@ -350,6 +370,7 @@ impl Settings {
             clip_frames: _,
             record: _,
             rerun_connect: _,
+            env_timeout_s: _,
             hidden,
             learning_rate,
             batch_size,
@@ -461,7 +482,7 @@ impl Settings {
         apply_scene_graph(&mut config.scene_graph, *side_engines_on_a0)?;
         apply_env(
             &mut config.env,
-            task,
+            &task,
             EnvSettings {
                 variant: *variant,
                 start: *start,
@@ -481,7 +502,17 @@ impl Settings {
         method: QueryMethod,
         seed: u64,
     ) -> Result<PreferenceRunConfig, String> {
-        let mut config = PreferenceRunConfig::new(task, method, seed);
+        self.apply_preference(PreferenceRunConfig::new(task, method, seed))
+    }
+
+    /// [`Settings::preference`] over given defaults (a declared task's, see
+    /// [`PreferenceRunConfig::declared`]).
+    pub fn apply_preference(
+        &self,
+        mut config: PreferenceRunConfig,
+    ) -> Result<PreferenceRunConfig, String> {
+        let method = config.method;
+        let task = config.task.clone();
         let Settings {
             pace_hz: _,
             answer_timeout_s: _,
@@ -489,6 +520,7 @@ impl Settings {
             clip_frames: _,
             record: _,
             rerun_connect: _,
+            env_timeout_s: _,
             hidden,
             learning_rate,
             batch_size,
@@ -593,7 +625,7 @@ impl Settings {
         apply_scene_graph(&mut config.scene_graph, *side_engines_on_a0)?;
         apply_env(
             &mut config.env,
-            task,
+            &task,
             EnvSettings {
                 variant: *variant,
                 start: *start,
@@ -624,7 +656,7 @@ impl Settings {
         let mut options = EnvOptions::default();
         apply_env(
             &mut options,
-            task,
+            &task.into(),
             EnvSettings {
                 variant: self.variant,
                 start: self.start,
@@ -645,6 +677,7 @@ impl Settings {
             checkpoint_every: Some(DEFAULT_CHECKPOINT_EVERY),
             clip_frames: Some(DEFAULT_CLIP_FRAMES),
             record: Some(true),
+            env_timeout_s: Some(DEFAULT_ENV_TIMEOUT_S),
             ..Settings::default()
         };
         let table_top = task != Task::LunarLander;
@@ -776,7 +809,8 @@ struct EnvSettings {
     release_at: Option<f32>,
 }
 
-fn apply_env(env: &mut EnvOptions, task: Task, given: EnvSettings) -> Result<(), String> {
+fn apply_env(env: &mut EnvOptions, task: &TaskRef, given: EnvSettings) -> Result<(), String> {
+    let builtin = task.builtin();
     let EnvSettings {
         variant,
         start,
@@ -785,7 +819,7 @@ fn apply_env(env: &mut EnvOptions, task: Task, given: EnvSettings) -> Result<(),
         release_at,
     } = given;
     let table_top_only = |key: &str| -> Result<(), String> {
-        if task == Task::LunarLander {
+        if !matches!(builtin, Some(Task::Reaching | Task::Placing)) {
             Err(format!("{key} applies to reaching and placing, not {task}"))
         } else {
             Ok(())
@@ -800,7 +834,7 @@ fn apply_env(env: &mut EnvOptions, task: Task, given: EnvSettings) -> Result<(),
         env.start = Some(s);
     }
     let placing_only = |key: &str| -> Result<(), String> {
-        if task == Task::Placing {
+        if builtin == Some(Task::Placing) {
             Ok(())
         } else {
             Err(format!("{key} applies to placing only, not {task}"))

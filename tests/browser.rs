@@ -197,3 +197,14 @@ fn review_shows_episodes_answers_and_metrics() {
 fn review_replays_an_episode() {
     browser_test("review.mjs", &[("REPLAY", "1")]);
 }
+
+#[test]
+fn trainer_draws_a_remote_envs_own_frames() {
+    // Gymnasium's Pendulum-v1 behind `python -m dualrep.env`, a task of its own.
+    let env = crate::support::python_client::EnvServer::start(
+        "Pendulum-v1",
+        &["--predicates", "dualrep.scenes:pendulum"],
+        0,
+    );
+    browser_test("remote_frames.mjs", &[("ENV_URL", &env.url)]);
+}

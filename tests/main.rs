@@ -20,6 +20,7 @@ mod http_api;
 mod lunar_lander;
 mod prefs_e2e;
 mod recording;
+mod remote_envs;
 mod report;
 mod reproduce;
 mod rl_gradients;

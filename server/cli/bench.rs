@@ -7,6 +7,9 @@
 //! to running nothing but large matrix products. `benches/reference/torch_sac_update.py` times
 //! the same update in PyTorch.
 //!
+//! `dualrep bench env` (module `bench_env`): env steps per second in-process and through the
+//! env protocol.
+//!
 //! `dualrep bench belief`: milliseconds per DRPL belief update (one Metropolis-Hastings chain)
 //! on random answers; `benches/reference/aprel_belief.py` times APReL's algorithm in numpy.
 
@@ -38,6 +41,8 @@ pub enum BenchWhat {
     Sac(SacBenchArgs),
     /// Milliseconds per DRPL belief update (2199 Metropolis-Hastings proposals).
     Belief(BeliefBenchArgs),
+    /// Env steps per second: our simulator, and through the env protocol on a remote env.
+    Env(super::bench_env::EnvBenchArgs),
 }
 
 #[derive(Debug, Args)]
@@ -100,6 +105,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     match args.what {
         BenchWhat::Sac(args) => bench_sac(args),
         BenchWhat::Belief(args) => bench_belief(args),
+        BenchWhat::Env(args) => super::bench_env::bench_env(args),
     }
 }
 

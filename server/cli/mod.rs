@@ -1,6 +1,7 @@
 //! The `dualrep` command line: one sub-command per file, each a thin shell over the library.
 
 mod bench;
+mod bench_env;
 mod expert;
 mod grid_executor;
 mod loadtest;
@@ -8,6 +9,7 @@ mod output;
 mod overrides;
 mod prefs;
 mod progress;
+mod remote;
 mod reproduce;
 pub mod serve;
 mod sim;

@@ -11,6 +11,7 @@ use super::AppState;
 use super::auth::SessionAccess;
 use super::error::{ApiError, ApiResult};
 use super::openapi::ErrorBody;
+use crate::remote_env::RemoteTarget;
 use crate::session::spec::DEFAULT_QUERIES;
 use crate::session::{SessionMethod, SessionSpec, TrainerKind};
 use crate::settings::Settings;
@@ -21,7 +22,14 @@ use crate::store::{AlignmentRow, AnswerCounts, AnswerRow, EpisodeRow, SessionRow
 #[derive(Debug, Deserialize, utoipa::ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LaunchRequest {
-    pub task: Task,
+    /// A built-in task; with `env`, the task that env stands in for (its scene graph,
+    /// features and expert). Give a task, an env, or both.
+    #[serde(default)]
+    pub task: Option<Task>,
+    /// An environment in another process (`{"url": "tcp://HOST:PORT"}`, see
+    /// `docs/env-protocol.md`) instead of our simulator.
+    #[serde(default)]
+    pub env: Option<RemoteTarget>,
     /// dref, ef-<percent> (ef-100, ef-50, ef-6.2, ...), sac, drpl, drpl-ss, fragment or full.
     #[schema(value_type = String, example = "dref")]
     pub method: SessionMethod,
@@ -73,12 +81,13 @@ impl LaunchRequest {
                 )));
             }
             self.steps.unwrap_or(match self.task {
-                Task::LunarLander => 150_000,
-                Task::Reaching | Task::Placing => 100_000,
+                Some(Task::LunarLander) => 150_000,
+                Some(Task::Reaching | Task::Placing) | None => 100_000,
             })
         };
         Ok(SessionSpec {
             task: self.task,
+            env: self.env,
             method: self.method,
             trainer: self.trainer,
             seed: self.seed,
@@ -92,7 +101,11 @@ impl LaunchRequest {
 #[derive(Debug, Serialize, utoipa::ToSchema)]
 pub struct SessionView {
     pub id: String,
+    /// The task (`remote`: a remote env's own task).
     pub task: String,
+    /// The remote env the session steps, if not our simulator.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub env: Option<RemoteTarget>,
     pub method: String,
     pub trainer: String,
     pub seed: i64,
@@ -141,6 +154,10 @@ async fn view(state: &AppState, row: SessionRow) -> ApiResult<SessionView> {
         unit: row.spec().map_or("steps", |s| s.method.budget_unit()),
         trainer_url: trainer_url(&row),
         params: row.config.get("params").cloned().unwrap_or_default(),
+        env: row
+            .config
+            .get("env")
+            .and_then(|env| serde_json::from_value(env.clone()).ok()),
         id: row.id,
         task: row.task,
         method: row.method,

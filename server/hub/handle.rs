@@ -55,6 +55,9 @@ pub struct Snapshot {
     pub reason: Option<String>,
     pub progress: ProgressMessage,
     pub geometry: Option<Geometry>,
+    /// The scene graph the running session phrases its queries in (a remote env's own task
+    /// declares it when the session starts).
+    pub graph: Option<crate::scene_graph::SceneGraph>,
 }
 
 /// A live session, as the HTTP routes and sockets hold it. Cheap to clone.

@@ -8,6 +8,7 @@
 //! - `events`: applying the session thread's events (store, browsers).
 //! - `answers`: the answer path, deadlines and undo.
 //! - `thread`: starting the session thread; `sink`: the channel it reports into.
+//! - `remote`: reaching a session's remote env from its thread, and what it resumes from.
 //! - `recording`: the session's Rerun recording as its observer.
 //! - `episode_frames`: the frames kept for replay.
 
@@ -17,6 +18,7 @@ mod events;
 mod handle;
 mod owner;
 mod recording;
+mod remote;
 mod sink;
 mod thread;
 
@@ -115,7 +117,7 @@ impl Hub {
             .store
             .insert_session(NewSession {
                 id: &id,
-                task: spec.task.id(),
+                task: spec.task_name(),
                 method: &method,
                 trainer: trainer.as_str().unwrap_or("human"),
                 seed: spec.seed,
@@ -262,15 +264,29 @@ impl Hub {
             .join(format!("{episode}.json"))
     }
 
-    /// Write a learner checkpoint to `<data dir>/checkpoints/<id>.safetensors` (atomically) and
-    /// return its path relative to the data dir.
-    async fn write_checkpoint(&self, id: &str, bytes: Vec<u8>) -> std::io::Result<String> {
+    /// What a session on a remote env resumes from: `<data dir>/checkpoints/<id>.resume` (its
+    /// latest run checkpoint, or its recorded trajectories).
+    pub fn resume_path(&self, id: &str) -> PathBuf {
+        self.config
+            .data_dir
+            .join("checkpoints")
+            .join(format!("{id}.resume"))
+    }
+
+    /// Write a learner checkpoint to `<data dir>/checkpoints/<id>.<extension>` (atomically)
+    /// and return its path relative to the data dir.
+    async fn write_checkpoint(
+        &self,
+        id: &str,
+        extension: &str,
+        bytes: Vec<u8>,
+    ) -> std::io::Result<String> {
         let dir = self.config.data_dir.join("checkpoints");
-        let relative = format!("checkpoints/{id}.safetensors");
+        let relative = format!("checkpoints/{id}.{extension}");
         let path = self.config.data_dir.join(&relative);
+        let tmp = path.with_extension(format!("{extension}.tmp"));
         tokio::task::spawn_blocking(move || {
             std::fs::create_dir_all(&dir)?;
-            let tmp = path.with_extension("safetensors.tmp");
             std::fs::write(&tmp, bytes)?;
             std::fs::rename(&tmp, &path)
         })

@@ -68,6 +68,8 @@ pub(super) struct Owner {
     pub reason: Option<String>,
     pub progress: ProgressMessage,
     pub geometry: Option<Geometry>,
+    /// The session's scene graph, once its thread started.
+    pub graph: Option<crate::scene_graph::SceneGraph>,
     /// The query the session thread waits on.
     pub pending: Option<Open>,
     /// A query open again after an undo (the session may meanwhile wait on `pending`).
@@ -106,6 +108,7 @@ impl Owner {
             reason: None,
             progress: progress.clone(),
             geometry: None,
+            graph: None,
         });
         let (commands, commands_rx): (UnboundedSender<Command>, _) =
             tokio::sync::mpsc::unbounded_channel();
@@ -127,6 +130,7 @@ impl Owner {
             reason: None,
             progress,
             geometry: None,
+            graph: None,
             pending: None,
             reopened: None,
             recent: VecDeque::new(),
@@ -254,6 +258,7 @@ impl Owner {
             reason: self.reason.clone(),
             progress: self.progress.clone(),
             geometry: self.geometry.clone(),
+            graph: self.graph,
         });
     }
 

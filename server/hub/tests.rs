@@ -143,7 +143,10 @@ impl Harness {
 async fn a_query_counts_as_no_feedback_exactly_at_its_timeout() {
     let h = harness().await;
     h.events
-        .send(SessionEvent::Started { replayed: 0 })
+        .send(SessionEvent::Started {
+            replayed: 0,
+            graph: crate::scene_graph::SceneGraph::Reaching,
+        })
         .unwrap();
     let id = h.ask(0).await;
     tokio::time::advance(TIMEOUT - Duration::from_millis(1)).await;
@@ -177,7 +180,10 @@ async fn a_query_counts_as_no_feedback_exactly_at_its_timeout() {
 async fn an_answer_before_the_timeout_wins_and_no_timeout_follows() {
     let h = harness().await;
     h.events
-        .send(SessionEvent::Started { replayed: 0 })
+        .send(SessionEvent::Started {
+            replayed: 0,
+            graph: crate::scene_graph::SceneGraph::Reaching,
+        })
         .unwrap();
     let id = h.ask(0).await;
     tokio::time::advance(TIMEOUT / 2).await;
@@ -204,7 +210,10 @@ async fn an_answer_before_the_timeout_wins_and_no_timeout_follows() {
 async fn an_answer_can_be_undone_within_the_window_and_not_after() {
     let h = harness().await;
     h.events
-        .send(SessionEvent::Started { replayed: 0 })
+        .send(SessionEvent::Started {
+            replayed: 0,
+            graph: crate::scene_graph::SceneGraph::Reaching,
+        })
         .unwrap();
     // Within the window: undone, the session told, and the query open again with a new
     // deadline.
@@ -242,7 +251,10 @@ async fn an_answer_can_be_undone_within_the_window_and_not_after() {
 async fn the_end_is_stored_and_published_and_open_queries_close() {
     let h = harness().await;
     h.events
-        .send(SessionEvent::Started { replayed: 0 })
+        .send(SessionEvent::Started {
+            replayed: 0,
+            graph: crate::scene_graph::SceneGraph::Reaching,
+        })
         .unwrap();
     let id = h.ask(0).await;
     h.events

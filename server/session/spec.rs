@@ -11,15 +11,20 @@ use crate::guidance::drpl::run::PreferenceRunConfig;
 use crate::guidance::drpl::selection::QueryMethod;
 use crate::guidance::evaluative_run::EvaluativeRunConfig;
 use crate::guidance::feedback_schedule::EvaluativeMethod;
+use crate::remote_env::{RemoteDescription, RemoteTarget};
+use crate::scene_graph::SceneGraph;
 use crate::settings::Settings;
-use crate::sim::Task;
+use crate::sim::{DeclaredTask, Task};
 
 use super::events::QueryKind;
 
 pub use crate::settings::{
-    DEFAULT_ANSWER_TIMEOUT_S, DEFAULT_CHECKPOINT_EVERY, DEFAULT_CLIP_FRAMES, DEFAULT_PACE_HZ,
-    SessionSettings,
+    DEFAULT_ANSWER_TIMEOUT_S, DEFAULT_CHECKPOINT_EVERY, DEFAULT_CLIP_FRAMES, DEFAULT_ENV_TIMEOUT_S,
+    DEFAULT_PACE_HZ, SessionSettings,
 };
+
+/// What the store and the API call a session on a remote env's own task.
+pub const REMOTE_TASK: &str = "remote";
 
 /// Preference queries when the launch request names none (Figure 5's budget).
 pub const DEFAULT_QUERIES: usize = 40;
@@ -106,7 +111,13 @@ impl<'de> Deserialize<'de> for SessionMethod {
 /// A session as launched, after defaults: everything needed to build it again.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SessionSpec {
-    pub task: Task,
+    /// The built-in task; with `env`, the task the remote env stands in for (its scene graph,
+    /// features and expert). `None` with `env`: the task the env declares about itself.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub task: Option<Task>,
+    /// An environment in another process (`docs/env-protocol.md`) instead of our simulator.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub env: Option<RemoteTarget>,
     pub method: SessionMethod,
     pub trainer: TrainerKind,
     pub seed: u64,
@@ -130,20 +141,56 @@ impl SessionSpec {
         self.params.session()
     }
 
-    /// The algorithm's configuration with every setting applied.
+    /// The task's name as the store and the API show it: ours, or `remote` for a remote env's
+    /// own task.
+    pub fn task_name(&self) -> &'static str {
+        self.task.map_or(REMOTE_TASK, Task::id)
+    }
+
+    /// The algorithm's configuration with every setting applied. A remote env's own task is
+    /// known only once it is reached: until then (validation) its predicates are none; see
+    /// [`SessionSpec::run_config_on`].
     pub fn run_config(&self) -> Result<RunConfig, String> {
+        self.run_config_on(None)
+    }
+
+    /// The configuration on a remote env that described itself as `declared` (used when the
+    /// spec has no task of ours).
+    pub fn run_config_on(&self, declared: Option<&RemoteDescription>) -> Result<RunConfig, String> {
+        let (task, graph, max_steps) = match (self.task, declared) {
+            (Some(task), _) => {
+                return Ok(match self.method {
+                    SessionMethod::Evaluative(method) => {
+                        RunConfig::Evaluative(self.params.evaluative(task, method, self.seed)?)
+                    }
+                    SessionMethod::Preference(method) => {
+                        RunConfig::Preference(self.params.preference(task, method, self.seed)?)
+                    }
+                });
+            }
+            (None, Some(d)) => (
+                d.declared_task(),
+                d.graph,
+                d.spec.max_episode_steps as usize,
+            ),
+            (None, None) => (DeclaredTask::default(), SceneGraph::Declared(&[]), 1000),
+        };
         Ok(match self.method {
             SessionMethod::Evaluative(method) => {
-                RunConfig::Evaluative(self.params.evaluative(self.task, method, self.seed)?)
+                RunConfig::Evaluative(self.params.apply_evaluative(
+                    EvaluativeRunConfig::declared(task, graph, method, self.seed),
+                )?)
             }
             SessionMethod::Preference(method) => {
-                RunConfig::Preference(self.params.preference(self.task, method, self.seed)?)
+                RunConfig::Preference(self.params.apply_preference(
+                    PreferenceRunConfig::declared(task, graph, method, self.seed, max_steps),
+                )?)
             }
         })
     }
 
     /// The scene graph the session's queries are phrased in (its `side_engines_on_a0` override
-    /// included).
+    /// included); a remote env's own task has the graph it declares, unknown here (empty).
     pub fn scene_graph(&self) -> Result<crate::scene_graph::SceneGraph, String> {
         Ok(match self.run_config()? {
             RunConfig::Evaluative(c) => c.scene_graph,
@@ -151,7 +198,8 @@ impl SessionSpec {
         })
     }
 
-    /// Everything a launch must get right, checked before the session is stored.
+    /// Everything a launch must get right, checked before the session is stored. A remote env
+    /// is not reached here: it may start later than the session is queued.
     pub fn validate(&self) -> Result<(), String> {
         if self.budget == 0 {
             return Err("the budget (steps or queries) must be at least 1".into());
@@ -161,6 +209,16 @@ impl SessionSpec {
                 "budget {} is above the limit of 10,000,000",
                 self.budget
             ));
+        }
+        match (&self.env, self.task) {
+            (None, None) => return Err("give a task, an env ({\"url\": ...}), or both".into()),
+            (Some(env), _) => env.validate().map_err(|e| format!("env: {e}"))?,
+            (None, Some(_)) => {}
+        }
+        if self.env.is_none() && self.params.env_timeout_s.is_some() {
+            return Err(
+                "env_timeout_s applies to sessions on a remote env (env: {\"url\": ...})".into(),
+            );
         }
         self.settings()?;
         self.run_config()?;
@@ -175,7 +233,8 @@ mod tests {
 
     fn spec(method: &str, params: serde_json::Value) -> SessionSpec {
         SessionSpec {
-            task: Task::Reaching,
+            task: Some(Task::Reaching),
+            env: None,
             method: method.parse().unwrap(),
             trainer: TrainerKind::Human,
             seed: 1,

@@ -69,6 +69,62 @@ impl fmt::Display for Task {
     }
 }
 
+/// Which task a run trains on: one of ours (on our simulator, or on a copy of it in another
+/// process), or one that an environment in another process declared about itself. Written as
+/// the task's name for ours (so configs and checkpoints read as before) and as an object for a
+/// declared one.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum TaskRef {
+    Builtin(Task),
+    Declared(DeclaredTask),
+}
+
+/// What a run needs to know of a task an environment declared (`docs/env-protocol.md`); its
+/// predicates are in the run's `SceneGraph::Declared`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DeclaredTask {
+    /// The id the env declared (`Pendulum-v1`, `my-robot`).
+    pub env: String,
+    /// DRPL's feature names: the env's own features, or its observation's entries when it
+    /// declares none.
+    pub features: Vec<String>,
+    /// Whether the env computes the features (else they are the observation).
+    #[serde(default)]
+    pub env_features: bool,
+}
+
+impl TaskRef {
+    /// One of ours, if it is.
+    pub fn builtin(&self) -> Option<Task> {
+        match self {
+            TaskRef::Builtin(t) => Some(*t),
+            TaskRef::Declared(_) => None,
+        }
+    }
+
+    /// The name files, logs and the API use: ours by name, a declared one by its env's id.
+    pub fn id(&self) -> &str {
+        match self {
+            TaskRef::Builtin(t) => t.id(),
+            TaskRef::Declared(d) => &d.env,
+        }
+    }
+}
+
+impl From<Task> for TaskRef {
+    fn from(task: Task) -> Self {
+        TaskRef::Builtin(task)
+    }
+}
+
+impl fmt::Display for TaskRef {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.id())
+    }
+}
+
 /// A task name that is not one of ours.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("unknown task {0:?}: expected one of reaching, placing, lunar-lander")]

@@ -65,6 +65,17 @@ pub(super) fn parse_value(text: &str) -> AnswerValue {
 }
 
 impl Store {
+    /// How many query numbers a session has used (its highest `seq` + 1): a session on a
+    /// remote env numbers new queries after all of them.
+    pub async fn query_count(&self, session_id: &str) -> Result<u64> {
+        let row =
+            sqlx::query("SELECT COALESCE(MAX(seq) + 1, 0) AS n FROM queries WHERE session_id = ?")
+                .bind(session_id)
+                .fetch_one(self.pool())
+                .await?;
+        Ok(row.get::<i64, _>("n") as u64)
+    }
+
     /// Store a query (or find it again: a resumed session re-asks an unanswered query with the
     /// same `seq`) and return its id.
     pub async fn upsert_query(

@@ -65,14 +65,15 @@ fn text(s: &str) -> Message {
 fn hello(
     row: &SessionRow,
     geometry: Option<crate::sim::Geometry>,
+    live_graph: Option<SceneGraph>,
     status: crate::store::Status,
 ) -> ServerMessage {
     let spec = row.spec().ok();
-    let task = spec.as_ref().map_or(crate::sim::Task::Reaching, |s| s.task);
-    let graph = spec
-        .as_ref()
-        .and_then(|s| s.scene_graph().ok())
-        .unwrap_or_else(|| SceneGraph::for_task(task));
+    let task = spec.as_ref().map_or("reaching", |s| s.task_name());
+    // The running session's graph (a remote env's own task declares it), else the spec's.
+    let graph = live_graph
+        .or_else(|| spec.as_ref().and_then(|s| s.scene_graph().ok()))
+        .unwrap_or(SceneGraph::Declared(&[]));
     let pace_hz = spec
         .as_ref()
         .and_then(|s| s.settings().ok())
@@ -123,9 +124,10 @@ async fn serve(state: AppState, row: SessionRow, mut socket: WebSocket) {
     let session = state.hub.session(&row.id);
     let snapshot = session.as_ref().map(SessionHandle::snapshot);
     let status = snapshot.as_ref().map_or(row.status, |s| s.status);
+    let live_graph = snapshot.as_ref().and_then(|s| s.graph);
     let geometry = snapshot.and_then(|s| s.geometry);
     if socket
-        .send(text(&hello(&row, geometry, status).to_text()))
+        .send(text(&hello(&row, geometry, live_graph, status).to_text()))
         .await
         .is_err()
     {

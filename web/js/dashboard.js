@@ -63,6 +63,8 @@ function buildForm() {
   if ($("task").options.length) return;
   const t = state.tasks;
   for (const task of t.tasks) $("task").append(option(task.id));
+  // A remote env's own task (needs an env URL): its predicates come from the env.
+  $("task").append(option("remote", "remote (the env's own task)"));
   const ev = $("method");
   const g1 = Object.assign(document.createElement("optgroup"), { label: "evaluative (steps)" });
   for (const m of t.methods.evaluative.filter((m) => !m.includes("<"))) g1.append(option(m));
@@ -75,8 +77,11 @@ function buildForm() {
   fillDefaults();
 }
 
+/** A remote env's own task: nothing known before the env is reached but the budgets. */
+const REMOTE_TASK = { id: "remote", defaults: { steps: 100000, queries: 40 }, settings: { evaluative: {}, preference: {} } };
+
 function currentTask() {
-  return state.tasks.tasks.find((t) => t.id === $("task").value);
+  return state.tasks.tasks.find((t) => t.id === $("task").value) ?? REMOTE_TASK;
 }
 
 function fillDefaults() {
@@ -86,8 +91,8 @@ function fillDefaults() {
   $("budget").placeholder = String(pref ? task.defaults.queries : task.defaults.steps);
   // The server's one list of settings, at their defaults for this task and method family.
   const settings = task.settings[pref ? "preference" : "evaluative"];
-  $("pace_hz").placeholder = String(settings.pace_hz);
-  $("answer_timeout_s").placeholder = String(settings.answer_timeout_s);
+  $("pace_hz").placeholder = String(settings.pace_hz ?? 20);
+  $("answer_timeout_s").placeholder = String(settings.answer_timeout_s ?? 60);
   const box = $("params");
   box.replaceChildren();
   for (const [k, v] of Object.entries(settings)) {
@@ -113,6 +118,15 @@ async function launch(ev) {
   ev.preventDefault();
   const method = $("method").value;
   const body = { task: $("task").value, method, trainer: $("trainer").value, seed: Number($("seed").value || 0), params: {} };
+  const envUrl = $("env_url").value.trim();
+  if (envUrl) body.env = { url: envUrl };
+  if (body.task === "remote") {
+    if (!envUrl) {
+      notify("The task 'remote' is an env's own task: give its env URL.", { kind: "error" });
+      return;
+    }
+    delete body.task;
+  }
   if ($("budget").value) body[isPreference(method) ? "queries" : "steps"] = Number($("budget").value);
   for (const k of ["pace_hz", "answer_timeout_s"]) if ($(k).value) body.params[k] = Number($(k).value);
   for (const input of $("params").querySelectorAll("input")) {
@@ -184,7 +198,7 @@ function row(s) {
     return c;
   };
   td(Object.assign(document.createElement("code"), { textContent: s.id }));
-  td(s.task);
+  td(s.env ? `${s.task} @ ${s.env.url}` : s.task);
   td(s.method);
   td(s.trainer);
   td(Object.assign(document.createElement("span"), { className: `pill ${s.status}`, textContent: s.status, title: s.reason ?? "" }));

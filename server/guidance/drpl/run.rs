@@ -20,7 +20,7 @@ use super::selection::{QueryMethod, QueryPair, Selector};
 use super::trainer::{Preference, PreferenceQuery, PreferenceTrainer};
 use super::trajectories::{self, DEFAULT_TRAJECTORIES};
 use crate::scene_graph::SceneGraph;
-use crate::sim::{EnvOptions, Start, Task};
+use crate::sim::{DeclaredTask, Env, EnvFault, EnvOptions, Start, Task, TaskRef};
 
 /// ChaCha streams of a run's seed (stream 1 is `trajectories::rng`).
 const THETA_STREAM: u64 = 2;
@@ -30,7 +30,7 @@ const BELIEF_STREAM: u64 = 4;
 /// Everything that defines a run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PreferenceRunConfig {
-    pub task: Task,
+    pub task: TaskRef,
     pub method: QueryMethod,
     pub seed: u64,
     /// Random-policy trajectories recorded.
@@ -51,7 +51,7 @@ impl PreferenceRunConfig {
     /// algorithms.md's defaults for `task` and `method`, uniform acquisition (the paper's).
     pub fn new(task: Task, method: QueryMethod, seed: u64) -> Self {
         Self {
-            task,
+            task: task.into(),
             method,
             seed,
             trajectories: DEFAULT_TRAJECTORIES,
@@ -67,6 +67,24 @@ impl PreferenceRunConfig {
                 start: (task != Task::LunarLander).then_some(Start::Uniform),
                 ..EnvOptions::default()
             },
+        }
+    }
+
+    /// The defaults for a task an env in another process declared, with its `graph`:
+    /// trajectories of at most `max_steps` steps (the env's own episode limit, or Lunar
+    /// Lander's 1000).
+    pub fn declared(
+        task: DeclaredTask,
+        graph: SceneGraph,
+        method: QueryMethod,
+        seed: u64,
+        max_steps: usize,
+    ) -> Self {
+        Self {
+            task: TaskRef::Declared(task),
+            max_steps,
+            scene_graph: graph,
+            ..Self::new(Task::LunarLander, method, seed)
         }
     }
 }
@@ -112,20 +130,44 @@ impl PreferenceRun {
     /// Record the trajectories (seconds for Lunar Lander) and set up the run.
     pub fn new(config: PreferenceRunConfig) -> Self {
         let trajs = Self::record_trajectories(&config);
-        let pool = QueryPool::from_trajectories(config.task, &trajs, config.min_run);
+        let pool = QueryPool::from_trajectories(&config.task, &trajs, config.min_run);
         Self::with_pool(config, pool)
     }
 
     /// The random-policy trajectories a run with `config` draws its queries from (seconds for
-    /// Lunar Lander), reproducible from the seed.
+    /// Lunar Lander), reproducible from the seed. Panics for a declared task: record those with
+    /// [`PreferenceRun::record_trajectories_on`].
     pub fn record_trajectories(config: &PreferenceRunConfig) -> Vec<trajectories::Trajectory> {
+        let task = config.task.builtin().unwrap_or_else(|| {
+            panic!(
+                "task {} lives in another process: record on its env",
+                config.task
+            )
+        });
         trajectories::collect(
-            config.task,
+            task,
             &config.env,
             &config.scene_graph,
             config.trajectories,
             config.max_steps,
             &mut trajectories::rng(config.seed),
+        )
+    }
+
+    /// [`PreferenceRun::record_trajectories`] on a given env (one in another process, whose
+    /// episodes need not repeat from their seeds), telling `progress` the trajectories done.
+    pub fn record_trajectories_on(
+        config: &PreferenceRunConfig,
+        env: &mut dyn Env,
+        progress: &mut dyn FnMut(usize),
+    ) -> Result<Vec<trajectories::Trajectory>, EnvFault> {
+        trajectories::collect_from(
+            env,
+            &config.scene_graph,
+            config.trajectories,
+            config.max_steps,
+            &mut trajectories::rng(config.seed),
+            progress,
         )
     }
 
