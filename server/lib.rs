@@ -22,9 +22,12 @@
 //! - [`guidance`]: when to ask (DREF's UCB query rule, EF-p%), who answers (the
 //!   `EvaluativeTrainer` trait, the expert oracle), the evaluative training loop; later, what
 //!   to ask (DRPL).
+//! - [`settings`]: every setting by name as one typed list (`Settings`), read by launch
+//!   requests, `--set`/TOML, `GET /api/tasks` and the dashboard; validated once.
 //! - [`session`]: one training session as a plain loop on its own thread, talking to the
 //!   server only through channels; pacing, queries to people, replay of stored answers on
-//!   resume, checkpoints. No async runtime, no database.
+//!   resume (on a remote env, which cannot replay, its latest whole-run checkpoint instead),
+//!   checkpoints. No async runtime, no database.
 //!
 //! The edge (files, processes, network, database):
 //!
@@ -37,11 +40,15 @@
 //! - [`http`]: REST routes, auth, errors, the web UI's files; [`ws`]: the trainer websocket and
 //!   its typed protocol.
 //! - [`shipped`]: the web UI and the shipped experts, carried inside the binary.
+//! - [`remote_env`]: environments in another process or on another machine
+//!   (`docs/env-protocol.md`): a blocking TCP client that is an `Env` like the built-in tasks,
+//!   with a deadline on every read and a reason for every fault.
 //! - [`record`]: the Rerun recording of a session (scene per step, rewards, predicates,
 //!   queries and answers on `step` and `episode` timelines) to an `.rrd` file and/or a live
 //!   viewer, from a logging thread behind a bounded channel.
-//! - [`report`]: the paper's Figures 3 and 5: the run grid and its child processes, aggregation
-//!   over seeds, `table.md`, SVG and PNG figures (aggregation and tables are pure functions).
+//! - [`report`]: the paper's Figures 3 and 5: the run grid, run as child processes here or as
+//!   Slurm job array tasks (one executor trait, two implementations), aggregation over seeds,
+//!   `table.md`, SVG and PNG figures (aggregation and tables are pure functions).
 //! - [`cli`]: the `dualrep` command line: `serve`, `sim`, `train`, `prefs`, `expert`,
 //!   `reproduce`, `bench`, `loadtest`.
 
@@ -51,11 +58,13 @@ pub mod http;
 pub mod hub;
 pub mod protocol;
 pub mod record;
+pub mod remote_env;
 pub mod report;
 pub mod rl;
 pub mod scene_graph;
 pub mod server;
 pub mod session;
+pub mod settings;
 pub mod shipped;
 pub mod sim;
 pub mod store;

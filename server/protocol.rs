@@ -9,8 +9,13 @@ use serde::{Deserialize, Serialize};
 use crate::scene_graph::Predicate;
 pub use crate::session::{AnswerValue, Answerer, QueryKind};
 use crate::session::{Frame, QueryContent};
-use crate::sim::{Geometry, Task};
+use crate::sim::Geometry;
 use crate::store::Status;
+
+/// A query's id on the wire: the session's own query number (0 for its first query), the
+/// order in which the session asked it. Answers, acks, withdrawals and errors name queries by
+/// it; it is also `query_id` in the REST answers and the exports.
+pub type QueryId = u64;
 
 /// Server to trainer.
 #[derive(Clone, Debug, Serialize)]
@@ -19,7 +24,8 @@ pub enum ServerMessage {
     /// First message on every connection.
     Hello {
         session: String,
-        task: Task,
+        /// `reaching`, `placing`, `lunar-lander`, or `remote` (a remote env's own task).
+        task: &'static str,
         method: String,
         /// Which answers this session takes.
         kind: QueryKind,
@@ -39,17 +45,17 @@ pub enum ServerMessage {
     Query(Box<QueryMessage>),
     /// The answer to `id` is stored.
     Ack {
-        id: i64,
+        id: QueryId,
         value: AnswerValue,
     },
     /// The answer to `id` was taken back (a trainer's undo); the query follows again, open for
     /// a new answer.
     Undone {
-        id: i64,
+        id: QueryId,
     },
     /// `id` needs no answer any more.
     Withdrawn {
-        id: i64,
+        id: QueryId,
         reason: WithdrawReason,
     },
     Progress(ProgressMessage),
@@ -57,7 +63,7 @@ pub enum ServerMessage {
         code: ErrorCode,
         message: String,
         #[serde(skip_serializing_if = "Option::is_none")]
-        id: Option<i64>,
+        id: Option<QueryId>,
     },
     /// The session is over (or the server is shutting down); no more messages follow.
     Ended {
@@ -70,9 +76,7 @@ pub enum ServerMessage {
 /// A query for the trainers.
 #[derive(Clone, Debug, Serialize)]
 pub struct QueryMessage {
-    pub id: i64,
-    /// 0-based order of the query in its session.
-    pub seq: u64,
+    pub id: QueryId,
     /// The environment step (evaluative) or query number (preference) it was asked at.
     pub step: u64,
     pub abstract_state: u32,
@@ -102,9 +106,17 @@ pub struct ProgressMessage {
 }
 
 /// Trainer to server.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum ClientMessage {
+    Answer { id: QueryId, value: AnswerValue },
+    Undo { id: QueryId },
+}
+
+/// [`ClientMessage`] as JSON: ids are read as any integer, so that a negative one is refused
+/// as an unknown query (no session has one) rather than as a malformed message.
+#[derive(Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+enum WireClientMessage {
     Answer { id: i64, value: AnswerValue },
     Undo { id: i64 },
 }
@@ -180,7 +192,7 @@ impl ProtocolError {
         )
     }
 
-    pub fn to_message(&self, id: Option<i64>) -> ServerMessage {
+    pub fn to_message(&self, id: Option<QueryId>) -> ServerMessage {
         ServerMessage::Error {
             code: self.code,
             message: self.message.clone(),
@@ -199,22 +211,37 @@ pub fn parse_client(text: &str) -> Result<ClientMessage, ProtocolError> {
             "a message is a JSON object with a \"type\"",
         ));
     }
-    serde_json::from_value(value).map_err(|e| {
+    let wire: WireClientMessage = serde_json::from_value(value).map_err(|e| {
         ProtocolError::new(
             ErrorCode::BadMessage,
             format!(
                 "{e}; expected {{\"type\": \"answer\", \"id\": <query id>, \"value\": 1 | 0 | -1 | \"left\" | \"right\" | \"equal\" | \"skip\"}} or {{\"type\": \"undo\", \"id\": <query id>}}"
             ),
         )
+    })?;
+    let query = |id: i64| {
+        QueryId::try_from(id).map_err(|_| {
+            ProtocolError::new(
+                ErrorCode::UnknownQuery,
+                format!("query {id} does not belong to this session"),
+            )
+        })
+    };
+    Ok(match wire {
+        WireClientMessage::Answer { id, value } => ClientMessage::Answer {
+            id: query(id)?,
+            value,
+        },
+        WireClientMessage::Undo { id } => ClientMessage::Undo { id: query(id)? },
     })
 }
 
 /// The id a (possibly malformed) message names, to attach to its error.
-pub fn id_of(text: &str) -> Option<i64> {
+pub fn id_of(text: &str) -> Option<QueryId> {
     serde_json::from_str::<serde_json::Value>(text)
         .ok()?
         .get("id")?
-        .as_i64()
+        .as_u64()
 }
 
 impl ServerMessage {
@@ -317,12 +344,14 @@ mod tests {
             id in prop::option::of(any::<i64>()),
             value in prop::sample::select(vec!["1", "0", "-1", "2", "1.5", "\"left\"", "\"skip\"", "null", "[]", "{}", "\"\"", "99999999999999999999"]),
         ) {
+            let negative = id.is_some_and(|i| i < 0);
             let id = id.map_or("null".to_string(), |i| i.to_string());
             let text = format!(r#"{{"type":"{ty}","id":{id},"value":{value}}}"#);
             match parse_client(&text) {
                 Ok(ClientMessage::Answer { value, .. }) => prop_assert!(ty == "answer" && (value.as_evaluation().is_some() || value.as_preference().is_some() || matches!(value, AnswerValue::Evaluation(_)))),
                 Ok(ClientMessage::Undo { .. }) => prop_assert!(false, "undo takes no value"),
-                Err(e) => prop_assert!(e.code == ErrorCode::BadMessage),
+                // A well-formed answer naming a negative query is an unknown query.
+                Err(e) => prop_assert!(e.code == ErrorCode::BadMessage || (negative && e.code == ErrorCode::UnknownQuery)),
             }
         }
     }

@@ -3,7 +3,7 @@
 //! on a free port with a fresh data dir and runs one script; screenshots land in
 //! `$DUALREP_ARTIFACTS` (default `<target dir>/browser-artifacts`).
 //!
-//! Needs `chromium`, `node` and `npm` (`.ci/run` installs whichever is missing; Debian's `npm`
+//! Needs `chromium`, `node` and `npm` (`bash tests/run.sh` installs whichever is missing; Debian's `npm`
 //! only where Node.js itself comes from Debian). `DUALREP_SKIP_BROWSER=1` skips these tests, loudly; without it a missing
 //! browser is a failure.
 
@@ -71,7 +71,7 @@ fn chromium() -> Option<PathBuf> {
             };
             panic!(
                 "the browser tests need Debian's chromium, node and npm (found: chromium {}, \
-                 node {}, npm {}).\n{install} (`bash .ci/run` installs what is missing, then runs \
+                 node {}, npm {}).\n{install} (`bash tests/run.sh` installs what is missing, then runs \
                  every test), or set DUALREP_SKIP_BROWSER=1 to skip these tests.",
                 c.is_some(),
                 n.is_some(),
@@ -196,4 +196,15 @@ fn review_shows_episodes_answers_and_metrics() {
 #[test]
 fn review_replays_an_episode() {
     browser_test("review.mjs", &[("REPLAY", "1")]);
+}
+
+#[test]
+fn trainer_draws_a_remote_envs_own_frames() {
+    // Gymnasium's Pendulum-v1 behind `python -m dualrep.env`, a task of its own.
+    let env = crate::support::python_client::EnvServer::start(
+        "Pendulum-v1",
+        &["--predicates", "dualrep.scenes:pendulum"],
+        0,
+    );
+    browser_test("remote_frames.mjs", &[("ENV_URL", &env.url)]);
 }

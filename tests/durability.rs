@@ -38,20 +38,20 @@ async fn acknowledged_answers_survive_sigkill_and_the_session_resumes() {
     let token = token_of(r["trainer_url"].as_str().unwrap());
 
     // Stream answers, logging every ack, and kill the server mid-stream.
-    let mut acked: HashMap<i64, (u64, Value)> = HashMap::new();
-    let mut seq_of: HashMap<i64, u64> = HashMap::new();
+    // Queries are named by the session's query number, on the wire and in the API.
+    let mut acked: HashMap<u64, Value> = HashMap::new();
     let mut t = Trainer::connect(addr, &id, &token).await;
     while acked.len() < 25 {
         let m = t.next(WAIT).await.expect("open");
         match m["type"].as_str().unwrap() {
             "query" => {
-                let qid = m["id"].as_i64().unwrap();
-                seq_of.insert(qid, m["seq"].as_u64().unwrap());
-                t.answer(qid, json!([1, 0, -1][(qid % 3) as usize])).await;
+                let qid = m["id"].as_u64().unwrap();
+                t.answer(qid as i64, json!([1, 0, -1][(qid % 3) as usize]))
+                    .await;
             }
             "ack" => {
-                let qid = m["id"].as_i64().unwrap();
-                acked.insert(qid, (seq_of[&qid], m["value"].clone()));
+                let qid = m["id"].as_u64().unwrap();
+                acked.insert(qid, m["value"].clone());
             }
             "error" | "ended" => panic!("unexpected {m}"),
             _ => {}
@@ -68,21 +68,24 @@ async fn acknowledged_answers_survive_sigkill_and_the_session_resumes() {
     ))
     .await
     .unwrap();
-    let rows = sqlx::query("SELECT query_id, value FROM answers WHERE session_id = ?")
-        .bind(&id)
-        .fetch_all(&pool)
-        .await
-        .unwrap();
-    let in_db: HashMap<i64, Value> = rows
+    let rows = sqlx::query(
+        "SELECT q.seq, a.value FROM answers a JOIN queries q ON q.id = a.query_id
+         WHERE a.session_id = ?",
+    )
+    .bind(&id)
+    .fetch_all(&pool)
+    .await
+    .unwrap();
+    let in_db: HashMap<u64, Value> = rows
         .iter()
         .map(|r| {
             (
-                r.get::<i64, _>("query_id"),
+                r.get::<i64, _>("seq") as u64,
                 serde_json::from_str(r.get::<&str, _>("value")).unwrap(),
             )
         })
         .collect();
-    for (q, (_, v)) in &acked {
+    for (q, v) in &acked {
         assert_eq!(
             in_db.get(q),
             Some(v),
@@ -97,13 +100,13 @@ async fn acknowledged_answers_survive_sigkill_and_the_session_resumes() {
     let s = api.get(&format!("/api/sessions/{id}")).await;
     assert_eq!(s["status"], "interrupted", "{s}");
     let answers = api.get(&format!("/api/sessions/{id}/answers")).await;
-    let via_api: HashMap<i64, Value> = answers
+    let via_api: HashMap<u64, Value> = answers
         .as_array()
         .unwrap()
         .iter()
-        .map(|a| (a["query_id"].as_i64().unwrap(), a["value"].clone()))
+        .map(|a| (a["query_id"].as_u64().unwrap(), a["value"].clone()))
         .collect();
-    for (q, (_, v)) in &acked {
+    for (q, v) in &acked {
         assert_eq!(via_api.get(q), Some(v));
     }
     let answered_before = via_api.len() as u64;
@@ -119,15 +122,14 @@ async fn acknowledged_answers_survive_sigkill_and_the_session_resumes() {
         let m = t.next(WAIT).await.expect("open");
         match m["type"].as_str().unwrap() {
             "query" => {
-                let seq = m["seq"].as_u64().unwrap();
+                let qid = m["id"].as_u64().unwrap();
                 assert!(
-                    seq >= answered_before,
-                    "query seq {seq} was answered before the crash"
+                    qid >= answered_before,
+                    "query {qid} was answered before the crash"
                 );
-                let qid = m["id"].as_i64().unwrap();
                 assert!(!acked.contains_key(&qid));
                 asked_after += 1;
-                t.answer(qid, json!(1)).await;
+                t.answer(qid as i64, json!(1)).await;
             }
             "error" => panic!("unexpected {m}"),
             "ended" => {
@@ -148,7 +150,7 @@ async fn acknowledged_answers_survive_sigkill_and_the_session_resumes() {
         .as_array()
         .unwrap()
         .iter()
-        .map(|a| a["seq"].as_u64().unwrap())
+        .map(|a| a["query_id"].as_u64().unwrap())
         .collect();
     assert_eq!(
         seqs,

@@ -189,11 +189,52 @@ async fn bad_launch_requests_get_clear_errors_and_nothing_is_stored() {
     assert_eq!(list.json(), json!([]));
 }
 
+/// The API's operations: the document is generated from the router, so this pins the surface.
+const OPERATIONS: [(&str, &str); 16] = [
+    ("post", "/api/sessions"),
+    ("get", "/api/sessions"),
+    ("get", "/api/sessions/{id}"),
+    ("post", "/api/sessions/{id}/stop"),
+    ("post", "/api/sessions/{id}/resume"),
+    ("get", "/api/sessions/{id}/episodes"),
+    ("get", "/api/sessions/{id}/episodes/{episode}/frames"),
+    ("get", "/api/sessions/{id}/answers"),
+    ("get", "/api/sessions/{id}/alignment"),
+    ("get", "/api/sessions/{id}/export"),
+    ("get", "/api/sessions/{id}/recording.rrd"),
+    ("post", "/api/sessions/{id}/survey"),
+    ("get", "/api/tasks"),
+    ("get", "/api/openapi.json"),
+    ("get", "/healthz"),
+    ("get", "/ws/sessions/{id}"),
+];
+
+/// Every `$ref` in `v`.
+fn refs(v: &Value, out: &mut Vec<String>) {
+    match v {
+        Value::Object(m) => {
+            if let Some(Value::String(r)) = m.get("$ref") {
+                out.push(r.clone());
+            }
+            m.values().for_each(|x| refs(x, out));
+        }
+        Value::Array(a) => a.iter().for_each(|x| refs(x, out)),
+        _ => {}
+    }
+}
+
 #[tokio::test]
 async fn the_openapi_document_lists_exactly_the_routes() {
-    let doc = openapi::document();
+    let dir = tempfile::tempdir().unwrap();
+    let router = app(state(dir.path()).await);
+    // The served document is the generated one.
+    let served = call(&router, "GET", "/api/openapi.json", None, None).await;
+    assert_eq!(served.status, StatusCode::OK);
+    let doc = served.json();
+    assert_eq!(doc, openapi::document());
+    assert_eq!(doc["openapi"], "3.1.0");
     let paths = doc["paths"].as_object().unwrap();
-    for (method, path) in openapi::OPERATIONS {
+    for (method, path) in OPERATIONS {
         assert!(
             paths.get(path).and_then(|p| p.get(method)).is_some(),
             "{method} {path} undocumented"
@@ -209,11 +250,32 @@ async fn the_openapi_document_lists_exactly_the_routes() {
                 .count()
         })
         .sum();
-    assert_eq!(documented, openapi::OPERATIONS.len());
+    assert_eq!(documented, OPERATIONS.len());
+    // Every schema a route names is in the document; the launch request's params are the one
+    // settings list.
+    let mut named = Vec::new();
+    refs(&doc, &mut named);
+    for r in &named {
+        let name = r.trim_start_matches("#/components/schemas/");
+        assert!(
+            doc["components"]["schemas"].get(name).is_some(),
+            "{r} is not in the document"
+        );
+    }
+    let schemas = &doc["components"]["schemas"];
+    assert!(schemas["Settings"]["properties"]["pace_hz"].is_object());
+    assert!(schemas["LaunchRequest"].to_string().contains("Settings"));
+    // Public routes need no token; the others take the researcher's bearer token.
+    for (method, path) in OPERATIONS {
+        let public = paths[path][method]["security"] == json!([{}]);
+        let expect_public = matches!(
+            path,
+            "/api/tasks" | "/api/openapi.json" | "/healthz" | "/ws/sessions/{id}"
+        );
+        assert_eq!(public, expect_public, "{method} {path}");
+    }
     // Every documented route answers something other than the API's 404.
-    let dir = tempfile::tempdir().unwrap();
-    let router = app(state(dir.path()).await);
-    for (method, path) in openapi::OPERATIONS {
+    for (method, path) in OPERATIONS {
         let uri = path.replace("{id}", "nosuch").replace("{episode}", "0");
         let r = call(&router, &method.to_uppercase(), &uri, Some(TOKEN), None).await;
         let unrouted = r.status == StatusCode::NOT_FOUND
@@ -270,11 +332,13 @@ async fn a_synthetic_drpl_session_runs_to_its_end_and_exports() {
     let answers = answers.as_array().unwrap();
     assert_eq!(answers.len(), 6);
     for (i, a) in answers.iter().enumerate() {
-        assert_eq!(a["seq"], i);
+        // Queries are named by the session's query number.
+        assert_eq!(a["query_id"], i);
+        assert!(a.get("seq").is_none(), "one id per query: {a}");
         assert_eq!(a["kind"], "preference");
         assert_eq!(a["who"], "synthetic");
         assert!(["left", "right", "equal", "skip"].contains(&a["value"].as_str().unwrap()));
-        for field in ["query_id", "step", "answered_at", "latency_ms"] {
+        for field in ["step", "answered_at", "latency_ms"] {
             assert!(!a[field].is_null(), "{field} missing in {a}");
         }
     }
@@ -311,7 +375,7 @@ async fn a_synthetic_drpl_session_runs_to_its_end_and_exports() {
     assert_eq!(csv.content_type, "text/csv");
     let text = String::from_utf8(csv.body).unwrap();
     assert_eq!(text.lines().count(), 7);
-    assert!(text.starts_with("query_id,seq,kind,step"));
+    assert!(text.starts_with("query_id,kind,step"));
     let jsonl = call(
         &router,
         "GET",

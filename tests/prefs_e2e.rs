@@ -211,9 +211,13 @@ fn bad_arguments_fail_clearly() {
         ),
         (
             vec!["--method", "drpl", "--set", "hidden=3"],
-            "unknown setting",
+            "hidden is a setting of evaluative methods",
         ),
-        (vec!["--method", "drpl", "--set", "beta=x"], "beta=x"),
+        (vec!["--method", "drpl", "--set", "beta=x"], "beta"),
+        (
+            vec!["--method", "drpl", "--set", "no_such=1"],
+            "unknown field `no_such`",
+        ),
     ] {
         let args: Vec<&str> = base.iter().copied().chain(extra.iter().copied()).collect();
         let o = dualrep(&args);

@@ -350,3 +350,73 @@ fn file_and_unreachable_viewer_tee_and_the_file_is_complete() {
     let file = rerun_py::read_rrd(&rrd);
     assert_per_step(&file, "world/gripper", 20);
 }
+
+/// A 2 x 1 PNG (a red and a green pixel), as `dualrep.env` encodes frames.
+const PNG_2X1: [u8; 72] = [
+    137, 80, 78, 71, 13, 10, 26, 10, 0, 0, 0, 13, 73, 72, 68, 82, 0, 0, 0, 2, 0, 0, 0, 1, 8, 2, 0,
+    0, 0, 123, 64, 232, 221, 0, 0, 0, 15, 73, 68, 65, 84, 120, 94, 99, 248, 207, 192, 192, 240,
+    159, 1, 0, 7, 255, 1, 255, 34, 219, 85, 25, 0, 0, 0, 0, 73, 69, 78, 68, 174, 66, 96, 130,
+];
+
+#[test]
+fn a_remote_envs_own_frames_are_recorded_as_images_with_its_predicates() {
+    use dualrep::scene_graph::declared::{DeclaredPredicate, declare};
+    use dualrep::sim::{Geometry, ImageFrame, MediaType, RenderState};
+
+    let dir = tempfile::tempdir().unwrap();
+    let rrd = dir.path().join("remote.rrd");
+    let graph = SceneGraph::Declared(
+        declare(&[DeclaredPredicate {
+            name: "upright".into(),
+            label: "pendulum upright".into(),
+        }])
+        .unwrap(),
+    );
+    let options = RecordingOptions {
+        path: Some(rrd.clone()),
+        connect: None,
+    };
+    let recorder = Recorder::start("dualrep-test", "remote", graph, &options)
+        .unwrap()
+        .unwrap();
+    let geometry = Geometry::Remote {
+        env: "Pendulum-v1".into(),
+        frame_size: Some([2, 1]),
+    };
+    recorder.episode_start(0, 0, &geometry);
+    let frame = ImageFrame {
+        media_type: MediaType::Png,
+        width: 2,
+        height: 1,
+        data: std::sync::Arc::from(&PNG_2X1[..]),
+    };
+    for step in 0..12u64 {
+        // Frames come only while people watch: here on the first ten steps.
+        let state = RenderState::Remote {
+            frame: (step < 10).then(|| frame.clone()),
+            observation: vec![step as f32, 0.0, 0.0],
+        };
+        let g = dualrep::scene_graph::AbstractState(u32::from(step % 2 == 0));
+        recorder.step(step, 0, &state, -1.0, 0.0, g);
+    }
+    recorder.finish().unwrap();
+    let file = rerun_py::read_rrd(&rrd);
+    assert_eq!(rows(&file, "world/frame"), 10);
+    let components = entity(&file, "world/frame")["components"].to_string();
+    assert!(components.contains("EncodedImage:blob"), "{components}");
+    assert!(
+        components.contains("EncodedImage:media_type"),
+        "{components}"
+    );
+    assert_per_step(&file, "predicates/upright", 12);
+    assert_eq!(
+        floats(&entity(&file, "predicates/upright")["scalars"]),
+        (0..12)
+            .map(|s| f64::from(u8::from(s % 2 == 0)))
+            .collect::<Vec<_>>()
+    );
+    assert!(
+        !file["entities"].as_object().unwrap().contains_key("world"),
+        "no 3D axes for a remote env's frames"
+    );
+}

@@ -263,6 +263,31 @@ fn reproduce_rejects_bad_arguments_before_running_anything() {
         (&["fig3", "--set", "no_equals"][..], "expected KEY=VALUE"),
         (&["fig3", "--tasks", "walking"][..], "unknown task"),
         (&["fig3", "--jobs", "0"][..], "--jobs"),
+        (
+            &["fig5", "--partition", "short"][..],
+            "--partition is for --executor slurm",
+        ),
+        (
+            &["fig5", "--no-wait"][..],
+            "--no-wait is for --executor slurm",
+        ),
+        (
+            &["fig5", "--executor", "slurm", "--time", "1 hour"][..],
+            "--time \"1 hour\": expected one word",
+        ),
+        (
+            &["fig5", "--executor", "slurm", "--sbatch-arg", "qos=low"][..],
+            "expected an sbatch option",
+        ),
+        (
+            &["fig5", "--executor", "slurm", "--poll", "0"][..],
+            "--poll 0",
+        ),
+        (&["fig5", "--executor", "pbs"][..], "invalid value 'pbs'"),
+        (
+            &["fig5", "--report-only", "--executor", "slurm", "--no-wait"][..],
+            "--report-only runs nothing",
+        ),
     ] {
         let out = reproduce(&g.out, &g.log, None, args);
         assert!(!out.status.success(), "{args:?}");

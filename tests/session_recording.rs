@@ -30,7 +30,8 @@ async fn a_synthetic_session_records_every_step_query_and_answer() {
     let st = state(dir.path()).await;
     let steps = 250;
     let spec = SessionSpec {
-        task: Task::Placing,
+        task: Some(Task::Placing),
+        env: None,
         method: "ef-25".parse().unwrap(),
         trainer: TrainerKind::Synthetic,
         seed: 5,

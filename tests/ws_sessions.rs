@@ -156,7 +156,7 @@ async fn a_human_drpl_session_runs_to_its_end() {
             "DRPL names the predicate: {}",
             q["predicate"]
         );
-        json!(values[q["seq"].as_u64().unwrap() as usize % 4])
+        json!(values[q["id"].as_u64().unwrap() as usize % 4])
     })
     .await;
     assert_eq!(acked.len(), 4);
@@ -255,11 +255,17 @@ async fn the_first_answer_wins_a_reconnect_gets_the_query_again_and_bad_input_is
         "already_answered"
     );
 
-    // A query of another session is foreign here.
+    // Query ids are each session's own numbers: the other session's first query is 0 as well,
+    // and on this session's socket 0 names this session's first query (answered above), so
+    // another session's answer can never land here.
     let mut o = Trainer::connect(server.addr, &other_id, &other_token).await;
-    let foreign = o.next_of(&["query"], WAIT).await["id"].as_i64().unwrap();
-    a.answer(foreign, json!(1)).await;
-    assert_eq!(a.next_of(&["error"], WAIT).await["code"], "unknown_query");
+    let other_first = o.next_of(&["query"], WAIT).await["id"].as_i64().unwrap();
+    assert_eq!((other_first, qid), (0, 0));
+    a.answer(other_first, json!(-1)).await;
+    assert_eq!(
+        a.next_of(&["error"], WAIT).await["code"],
+        "already_answered"
+    );
 
     // An oversized message closes that socket only; the server keeps serving.
     a.send_text(&format!(
@@ -360,7 +366,7 @@ async fn an_undone_answer_is_asked_again_replaced_and_replayed_after_a_restart()
         &mut parked,
     )
     .await;
-    assert_eq!(again["seq"], 0);
+    assert_eq!(again["id"], 0, "the session's first query");
     // While it is open nobody can undo it again; an older answer cannot be undone at all.
     t.send_text(&json!({"type": "undo", "id": first}).to_string())
         .await;

@@ -13,6 +13,9 @@
 //! `dualrep bench train` (`bench_train.rs`): environment steps per second of a whole run;
 //! `dualrep bench kernels` (`bench_kernels.rs`): each product of a layer alone.
 //!
+//! `dualrep bench env` (module `bench_env`): env steps per second in-process and through the
+//! env protocol.
+//!
 //! `dualrep bench belief`: milliseconds per DRPL belief update (one Metropolis-Hastings chain)
 //! on random answers; `benches/reference/aprel_belief.py` times APReL's algorithm in numpy.
 
@@ -27,9 +30,11 @@ use serde::Serialize;
 
 use super::compute::Compute;
 use crate::guidance::drpl::belief::{Belief, BeliefConfig, Response};
+use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::rl::kernels::{self, KernelPath};
 use crate::rl::replay::{ReplayBuffer, Transition};
-use crate::rl::sac::{Sac, SacConfig, mflop_per_update};
+use crate::rl::sac::{Sac, mflop_per_update};
+use crate::settings::Settings;
 use crate::sim::Task;
 
 #[derive(Debug, Args)]
@@ -48,6 +53,8 @@ pub enum BenchWhat {
     Kernels(super::bench_kernels::KernelBenchArgs),
     /// Environment steps per second of a whole run (env, scene graph, oracle, updates).
     Train(super::bench_train::TrainBenchArgs),
+    /// Env steps per second: our simulator, and through the env protocol on a remote env.
+    Env(super::bench_env::EnvBenchArgs),
 }
 
 #[derive(Debug, Args)]
@@ -123,6 +130,7 @@ pub fn run(args: BenchArgs, compute: &Compute) -> anyhow::Result<()> {
         BenchWhat::Belief(args) => bench_belief(args),
         BenchWhat::Kernels(args) => super::bench_kernels::run(args, compute.threads.unwrap_or(1)),
         BenchWhat::Train(args) => super::bench_train::run(args, compute),
+        BenchWhat::Env(args) => super::bench_env::bench_env(args),
     }
 }
 
@@ -149,25 +157,28 @@ fn bench_sac_on(args: SacBenchArgs, path: KernelPath, threads: usize) -> anyhow:
     if !args.seconds.is_finite() || args.seconds <= 0.0 {
         bail!("--seconds must be positive");
     }
-    let mut config = SacConfig::for_task(args.task);
-    if let Some(hidden) = &args.hidden {
-        config
-            .set("hidden", hidden)
-            .map_err(anyhow::Error::msg)
-            .context("--hidden")?;
-    }
+    let settings = Settings::from_pairs(
+        [
+            ("hidden", args.hidden.as_deref()),
+            ("human_critic", Some("true")),
+        ]
+        .into_iter()
+        .filter_map(|(k, v)| Some((k, v?))),
+    )
+    .map_err(anyhow::Error::msg)
+    .context("--hidden")?;
+    let mut config = settings
+        .evaluative(args.task, EvaluativeMethod::Dref, 0)
+        .map_err(anyhow::Error::msg)
+        .context("--hidden")?
+        .sac;
     if let Some(batch) = args.batch {
-        config
-            .set("batch_size", &batch.to_string())
-            .map_err(anyhow::Error::msg)
-            .context("--batch")?;
+        if batch == 0 {
+            bail!("--batch must be at least 1");
+        }
+        config.batch_size = batch;
     }
     config.gradient_steps = 1;
-    if config.human_critic.is_none() {
-        config
-            .set("human_critic", "true")
-            .map_err(anyhow::Error::msg)?;
-    }
     let (obs_dim, act_dim) = task_dims(args.task);
     let replay = random_replay(obs_dim, act_dim, 100_000);
     let mut sac = Sac::new(obs_dim, act_dim, config.clone(), 0);

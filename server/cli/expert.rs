@@ -10,16 +10,18 @@ use serde::Serialize;
 
 use super::output::{publish_summary, write_atomically};
 use super::overrides;
-use super::train::{NoTrainer, drive, final_performance, resolve_config};
-use crate::guidance::evaluative_run::{EvaluativeRun, EvaluativeRunConfig, evaluate_policy};
+use super::remote::RemoteArgs;
+use super::train::{NoTrainer, drive, final_performance, resolve_config, resolve_remote_config};
+use crate::guidance::evaluative_run::{EvaluativeRun, EvaluativeRunConfig, evaluate_policy_on};
 use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::rl::Sac;
-use crate::sim::Task;
+use crate::sim::{Env, Task};
 
 #[derive(Debug, Args)]
 pub struct ExpertArgs {
+    /// reaching, placing or lunar-lander (with `--env-url`: the task the remote env copies).
     #[arg(long)]
-    pub task: Task,
+    pub task: Option<Task>,
     #[arg(long, default_value_t = 200_000, value_parser = clap::value_parser!(u64).range(1..))]
     pub steps: u64,
     #[arg(long, default_value_t = 0)]
@@ -38,12 +40,18 @@ pub struct ExpertArgs {
     /// run, and the oracle should be the best policy the run found. 0 ships the last policy.
     #[arg(long, default_value_t = 0)]
     pub eval_every: u64,
+    /// With `--env-url`, the policy is evaluated on a second connection to the env (a robot
+    /// that serves one connection at a time needs `--eval-episodes 0`).
+    #[command(flatten)]
+    pub remote: RemoteArgs,
 }
 
 /// The note shipped beside an expert.
 #[derive(Debug, Serialize)]
 struct ExpertNote {
-    task: Task,
+    task: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    env_url: Option<String>,
     steps: u64,
     seed: u64,
     episodes: u64,
@@ -70,16 +78,51 @@ struct EvalCheck {
     success_rate: f64,
 }
 
+/// The policy's mean return and success rate on a fresh env: ours, or a new connection to the
+/// remote one (0 episodes: not evaluated, NaN).
+fn evaluate(
+    args: &ExpertArgs,
+    config: &EvaluativeRunConfig,
+    learner: &mut Sac,
+    seed: u64,
+) -> anyhow::Result<(f64, f64)> {
+    if args.eval_episodes == 0 {
+        return Ok((f64::NAN, f64::NAN));
+    }
+    let mut env: Box<dyn Env> = match args.remote.connect(args.task)? {
+        Some(remote) => Box::new(remote),
+        None => config.make_env(),
+    };
+    Ok(evaluate_policy_on(
+        env.as_mut(),
+        learner,
+        args.eval_episodes,
+        seed,
+    )?)
+}
+
 pub fn run(args: ExpertArgs) -> anyhow::Result<()> {
-    let config = resolve_config(args.task, EvaluativeMethod::Sac, args.seed, &args.overrides)?;
+    let remote = args.remote.connect(args.task)?;
+    let config = match (&remote, args.task) {
+        (Some(env), task) => {
+            resolve_remote_config(env, task, EvaluativeMethod::Sac, args.seed, &args.overrides)?
+        }
+        (None, Some(task)) => {
+            resolve_config(task, EvaluativeMethod::Sac, args.seed, &args.overrides)?
+        }
+        (None, None) => unreachable!("RemoteArgs::connect asks for a task"),
+    };
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
     let metrics_dir = args.out.with_extension("train");
     std::fs::create_dir_all(&metrics_dir)?;
     let start = Instant::now();
-    let mut run = EvaluativeRun::new(config.clone(), args.steps);
-    let label = format!("expert {} seed {}", args.task, args.seed);
+    let mut run = match remote {
+        Some(env) => EvaluativeRun::with_env(config.clone(), Box::new(env), args.steps)?,
+        None => EvaluativeRun::new(config.clone(), args.steps),
+    };
+    let label = format!("expert {} seed {}", config.task, args.seed);
     let mut episodes = Vec::new();
     let mut checks = Vec::new();
     // (mean return, step, policy) of the best periodic check so far.
@@ -106,13 +149,7 @@ pub fn run(args: ExpertArgs) -> anyhow::Result<()> {
         if args.eval_every > 0 {
             // Evaluate a copy, so the check leaves the run's own state (and its RNG) untouched.
             let mut copy = run.learner().clone();
-            let (mean_return, success_rate) = evaluate_policy(
-                args.task,
-                &config.env,
-                &mut copy,
-                args.eval_episodes,
-                2_000_000,
-            );
+            let (mean_return, success_rate) = evaluate(&args, &config, &mut copy, 2_000_000)?;
             eprintln!(
                 "expert check at step {target}: return {mean_return:.1}, success {success_rate:.2}"
             );
@@ -135,16 +172,11 @@ pub fn run(args: ExpertArgs) -> anyhow::Result<()> {
         None => (None, run.into_learner()),
     };
     // The shipped policy is judged on seeds the periodic checks never saw.
-    let (eval_mean_return, eval_success_rate) = evaluate_policy(
-        args.task,
-        &config.env,
-        &mut learner,
-        args.eval_episodes,
-        1_000_000,
-    );
+    let (eval_mean_return, eval_success_rate) = evaluate(&args, &config, &mut learner, 1_000_000)?;
     write_atomically(&args.out, &learner.to_safetensors())?;
     let note = ExpertNote {
-        task: args.task,
+        task: config.task.id().to_string(),
+        env_url: args.remote.env_url.clone(),
         steps: args.steps,
         seed: args.seed,
         episodes: episodes_done,

@@ -50,8 +50,9 @@ struct TrainerLog {
     sent: u64,
     /// Milliseconds from sending an answer to its `ack`.
     latencies: Vec<f64>,
-    /// `(query id, value)` of every acknowledged answer.
-    acked: Vec<(i64, i64)>,
+    /// `(session, query id, value)` of every acknowledged answer (a query id names a query
+    /// within its session).
+    acked: Vec<(Arc<str>, i64, i64)>,
     errors: HashMap<String, u64>,
     connect_failures: u64,
 }
@@ -88,7 +89,7 @@ fn value_for(query_id: i64) -> i64 {
     [1, 0, -1][query_id.rem_euclid(3) as usize]
 }
 
-async fn trainer(url: String, until: Instant, log: Arc<Mutex<TrainerLog>>) {
+async fn trainer(session: Arc<str>, url: String, until: Instant, log: Arc<Mutex<TrainerLog>>) {
     // Nagle off, as a browser's small websocket messages go out at once.
     let socket = match tokio_tungstenite::connect_async_with_config(&url, None, true).await {
         Ok((s, _)) => s,
@@ -127,7 +128,9 @@ async fn trainer(url: String, until: Instant, log: Arc<Mutex<TrainerLog>>) {
             Some("ack") => {
                 if let Some(t) = sent_at.get(&id) {
                     local.latencies.push(t.elapsed().as_secs_f64() * 1e3);
-                    local.acked.push((id, v["value"].as_i64().unwrap_or(99)));
+                    local
+                        .acked
+                        .push((session.clone(), id, v["value"].as_i64().unwrap_or(99)));
                 }
             }
             Some("error") => {
@@ -220,7 +223,7 @@ async fn loadtest(args: LoadtestArgs) -> anyhow::Result<()> {
         .map(|i| {
             let (id, t) = &sessions[i % sessions.len()];
             let url = format!("ws://{addr}/ws/sessions/{id}?token={t}");
-            tokio::spawn(trainer(url, until, log.clone()))
+            tokio::spawn(trainer(id.as_str().into(), url, until, log.clone()))
         })
         .collect();
     for t in tasks {
@@ -236,7 +239,7 @@ async fn loadtest(args: LoadtestArgs) -> anyhow::Result<()> {
     }
 
     // Every acknowledged answer must be in the database, with its value.
-    let mut stored: HashMap<i64, i64> = HashMap::new();
+    let mut stored: HashMap<(&str, i64), i64> = HashMap::new();
     for (id, _) in &sessions {
         let answers: Vec<Value> = http
             .get(format!("{base}/api/sessions/{id}/answers"))
@@ -248,7 +251,7 @@ async fn loadtest(args: LoadtestArgs) -> anyhow::Result<()> {
             .await?;
         for a in answers {
             if let (Some(q), Some(v)) = (a["query_id"].as_i64(), a["value"].as_i64()) {
-                stored.insert(q, v);
+                stored.insert((id.as_str(), q), v);
             }
         }
     }
@@ -256,12 +259,12 @@ async fn loadtest(args: LoadtestArgs) -> anyhow::Result<()> {
     let lost = log
         .acked
         .iter()
-        .filter(|(q, v)| stored.get(q) != Some(v))
+        .filter(|(s, q, v)| stored.get(&(&**s, *q)) != Some(v))
         .count() as u64;
     let queries_answered = log
         .acked
         .iter()
-        .map(|(q, _)| *q)
+        .map(|(s, q, _)| (s.clone(), *q))
         .collect::<std::collections::HashSet<_>>()
         .len();
     let mut lat = log.latencies.clone();

@@ -1,15 +1,18 @@
 //! The `dualrep` command line: one sub-command per file, each a thin shell over the library.
 
 mod bench;
+mod bench_env;
 mod bench_kernels;
 mod bench_train;
 mod compute;
 mod expert;
+mod grid_executor;
 mod loadtest;
 mod output;
 mod overrides;
 mod prefs;
 mod progress;
+mod remote;
 mod reproduce;
 pub mod serve;
 mod sim;
@@ -42,7 +45,7 @@ pub enum Command {
     Prefs(prefs::PrefsArgs),
     /// Train the SAC expert that the synthetic evaluative trainer consults.
     Expert(expert::ExpertArgs),
-    /// Run the paper's Figure 3 or 5 grid as parallel processes; write table.md and figures.
+    /// Run the paper's Figure 3 or 5 grid here or on Slurm; write table.md and figures.
     Reproduce(reproduce::ReproduceArgs),
     /// Real websocket trainers against a server: answers per second, ack latency, lost answers.
     Loadtest(loadtest::LoadtestArgs),

@@ -1,22 +1,48 @@
-//! Hyper-parameter overrides for `train` and `expert`: `--set key=value` (repeatable) and a
-//! TOML file of `key = value` lines, applied to a run's config in that order.
+//! Settings for `train`, `expert`, `prefs` and `sim`: `--set key=value` (repeatable) and a TOML
+//! file of `key = value` lines, read into the one typed settings list ([`Settings`]), the file
+//! first and `--set` over it.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use clap::Args;
 
-use crate::guidance::evaluative_run::EvaluativeRunConfig;
+use crate::settings::Settings;
 
-/// The override flags `train` and `expert` share.
+/// The settings flags the headless commands share.
 #[derive(Debug, Args)]
 pub struct OverrideArgs {
-    /// Override a hyper-parameter, e.g. `--set hidden=256,256 --set c=0.3` (repeatable).
+    /// Override a setting, e.g. `--set hidden=256,256 --set c=0.3` (repeatable; `GET
+    /// /api/tasks` and the README list them).
     #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_pair)]
     pub overrides: Vec<(String, String)>,
-    /// A TOML file of `key = value` overrides, applied before `--set`.
+    /// A TOML file of `key = value` settings, applied before `--set`.
     #[arg(long)]
     pub config: Option<PathBuf>,
+}
+
+impl OverrideArgs {
+    /// The TOML file's settings, then `--set`'s over them. A headless run has no session, so
+    /// the session's own settings (`pace_hz`, `record`, ...) are refused here.
+    pub fn settings(&self) -> anyhow::Result<Settings> {
+        let from_file = match &self.config {
+            Some(path) => read_toml(path)?,
+            None => Settings::default(),
+        };
+        let from_flags =
+            Settings::from_pairs(self.overrides.iter().map(|(k, v)| (k.as_str(), v.as_str())))
+                .map_err(anyhow::Error::msg)
+                .context("--set")?;
+        let settings = from_file.merged(from_flags).map_err(anyhow::Error::msg)?;
+        let session_only = settings.session_keys_set();
+        if !session_only.is_empty() {
+            bail!(
+                "{} only apply to the server's sessions, not to a headless run",
+                session_only.join(", ")
+            );
+        }
+        Ok(settings)
+    }
 }
 
 /// One `key=value` pair, split at the first `=`.
@@ -30,45 +56,29 @@ pub fn parse_pair(s: &str) -> Result<(String, String), String> {
     Ok((k.trim().to_string(), v.trim().to_string()))
 }
 
-/// Read a TOML file of flat `key = value` entries as strings, in file order.
-pub fn read_toml(path: &Path) -> anyhow::Result<Vec<(String, String)>> {
+/// Read a TOML file of flat `key = value` settings.
+pub fn read_toml(path: &Path) -> anyhow::Result<Settings> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let table: toml::Table = text
         .parse()
         .with_context(|| format!("parsing {} as TOML", path.display()))?;
-    table
-        .into_iter()
-        .map(|(k, v)| {
-            let value = match v {
-                toml::Value::String(s) => s,
-                toml::Value::Integer(i) => i.to_string(),
-                toml::Value::Float(f) => f.to_string(),
-                toml::Value::Boolean(b) => b.to_string(),
-                toml::Value::Array(items) => items
-                    .iter()
-                    .map(|x| x.to_string())
-                    .collect::<Vec<_>>()
-                    .join(","),
-                other => bail!("{}: {k} = {other} is not a plain value", path.display()),
-            };
-            Ok((k, value))
-        })
-        .collect()
-}
-
-/// Apply one override (see `EvaluativeRunConfig::set`).
-pub fn apply(config: &mut EvaluativeRunConfig, key: &str, value: &str) -> Result<(), String> {
-    config.set(key, value)
+    if let Some((k, _)) = table.iter().find(|(_, v)| v.is_table()) {
+        bail!(
+            "{}: {k} is a table; settings are flat `key = value` lines",
+            path.display()
+        );
+    }
+    let json = serde_json::to_value(&table)?;
+    Settings::from_json(json)
+        .map_err(anyhow::Error::msg)
+        .with_context(|| format!("reading settings from {}", path.display()))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::guidance::feedback_schedule::EvaluativeMethod;
     use crate::guidance::query_rule::UcbForm;
-    use crate::scene_graph::SceneGraph;
-    use crate::sim::Task;
 
     #[test]
     fn pairs_split_at_the_first_equals_sign() {
@@ -82,49 +92,42 @@ mod tests {
     }
 
     #[test]
-    fn query_rule_keys_and_errors() {
-        let mut config = EvaluativeRunConfig::new(Task::LunarLander, EvaluativeMethod::Dref, 0);
-        apply(&mut config, "c", "0.5").unwrap();
-        apply(&mut config, "k", "7").unwrap();
-        apply(&mut config, "ucb", "paper").unwrap();
-        apply(&mut config, "side_engines_on_a0", "true").unwrap();
-        assert_eq!(
-            (
-                config.query_rule.c,
-                config.query_rule.k,
-                config.query_rule.form
-            ),
-            (0.5, 7, UcbForm::Paper)
-        );
-        assert_eq!(
-            config.scene_graph,
-            SceneGraph::LunarLander {
-                side_engines_on_a0: true
-            }
-        );
-        assert!(apply(&mut config, "k", "-1").unwrap_err().contains("k=-1"));
-        assert!(apply(&mut config, "ucb", "best").is_err());
-        let mut reaching = EvaluativeRunConfig::new(Task::Reaching, EvaluativeMethod::Dref, 0);
-        assert!(apply(&mut reaching, "side_engines_on_a0", "true").is_err());
-    }
-
-    #[test]
-    fn toml_values_become_strings() {
-        let dir = std::env::temp_dir().join(format!("dualrep-overrides-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("run.toml");
+    fn toml_files_and_flags_read_into_one_settings_list() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("run.toml");
         std::fs::write(
             &path,
             "hidden = [32, 32]\nc = 0.25\nucb = \"paper\"\nhuman_critic_mask = true\n",
         )
         .unwrap();
-        let pairs = read_toml(&path).unwrap();
-        assert!(pairs.contains(&("hidden".into(), "32,32".into())));
-        assert!(pairs.contains(&("c".into(), "0.25".into())));
-        assert!(pairs.contains(&("ucb".into(), "paper".into())));
-        std::fs::write(&path, "[section]\nx = 1\n").unwrap();
-        assert!(read_toml(&path).is_err());
-        std::fs::write(&path, "not toml at all ===").unwrap();
-        assert!(read_toml(&path).is_err());
+        let file = read_toml(&path).unwrap();
+        assert_eq!(file.hidden, Some(vec![32, 32]));
+        assert_eq!((file.c, file.ucb), (Some(0.25), Some(UcbForm::Paper)));
+        assert_eq!(file.human_critic_mask, Some(true));
+        let args = OverrideArgs {
+            overrides: vec![("c".into(), "0.5".into())],
+            config: Some(path.clone()),
+        };
+        let merged = args.settings().unwrap();
+        assert_eq!((merged.c, merged.hidden), (Some(0.5), Some(vec![32, 32])));
+        let session = OverrideArgs {
+            overrides: vec![("pace_hz".into(), "5".into())],
+            config: None,
+        };
+        assert!(
+            session
+                .settings()
+                .unwrap_err()
+                .to_string()
+                .contains("pace_hz")
+        );
+        for bad in [
+            "[section]\nx = 1\n",
+            "not toml at all ===",
+            "no_such_key = 1\n",
+        ] {
+            std::fs::write(&path, bad).unwrap();
+            assert!(read_toml(&path).is_err(), "{bad}");
+        }
     }
 }

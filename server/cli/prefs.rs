@@ -15,19 +15,21 @@ use serde::Serialize;
 use super::output::publish_summary;
 use super::overrides;
 use super::progress::Progress;
+use super::remote::RemoteArgs;
 use crate::guidance::drpl::acquisition::Acquisition;
 use crate::guidance::drpl::features;
-use crate::guidance::drpl::pool::Clip;
+use crate::guidance::drpl::pool::{Clip, QueryPool};
 use crate::guidance::drpl::run::{PreferenceRun, PreferenceRunConfig, QueryReport};
 use crate::guidance::drpl::selection::QueryMethod;
 use crate::guidance::drpl::trainer::{Preference, SyntheticOracle};
+use crate::remote_env::RemoteEnv;
 use crate::sim::Task;
 
 #[derive(Debug, Args)]
 pub struct PrefsArgs {
-    /// reaching, placing or lunar-lander.
+    /// reaching, placing or lunar-lander (with `--env-url`: the task the remote env copies).
     #[arg(long)]
-    pub task: Task,
+    pub task: Option<Task>,
     /// drpl, drpl-ss, fragment or full.
     #[arg(long)]
     pub method: QueryMethod,
@@ -49,6 +51,8 @@ pub struct PrefsArgs {
     pub acquisition: Option<Acquisition>,
     #[command(flatten)]
     pub overrides: overrides::OverrideArgs,
+    #[command(flatten)]
+    pub remote: RemoteArgs,
 }
 
 fn parse_acquisition(s: &str) -> Result<Acquisition, String> {
@@ -64,7 +68,11 @@ fn parse_acquisition(s: &str) -> Result<Acquisition, String> {
 /// `summary.json`.
 #[derive(Debug, Serialize)]
 pub struct PrefsSummary {
-    pub task: Task,
+    /// The task's name (a declared task's: its env's id).
+    pub task: String,
+    /// The remote env the trajectories were recorded on, if not our simulator.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub env_url: Option<String>,
     pub method: QueryMethod,
     pub seed: u64,
     /// Queries asked (fewer than requested only if the method ran out of new pairs).
@@ -78,7 +86,7 @@ pub struct PrefsSummary {
     /// Median wall time of one belief update; `null` if no answer updated the belief.
     pub belief_update_ms_median: Option<f64>,
     pub theta_true: Vec<f64>,
-    pub feature_names: &'static [&'static str],
+    pub feature_names: Vec<String>,
     pub wall_seconds: f64,
     pub config: PreferenceRunConfig,
 }
@@ -120,16 +128,28 @@ fn clip_line(clip: &Clip, graph_dim: usize) -> ClipLine<'_> {
     }
 }
 
-/// The run's config: defaults, then the TOML file, then `--set`, then the dedicated flags.
-pub fn resolve_config(args: &PrefsArgs) -> anyhow::Result<PreferenceRunConfig> {
-    let mut config = PreferenceRunConfig::new(args.task, args.method, args.seed);
-    let from_file = match &args.overrides.config {
-        Some(path) => overrides::read_toml(path)?,
-        None => Vec::new(),
+/// The run's config: defaults (our task's, or those of the task a remote env declared), then
+/// the TOML file, then `--set`, then the dedicated flags.
+pub fn resolve_config(
+    args: &PrefsArgs,
+    remote: Option<&RemoteEnv>,
+) -> anyhow::Result<PreferenceRunConfig> {
+    let settings = args.overrides.settings()?;
+    let config = match (args.task, remote) {
+        (Some(task), _) => settings.preference(task, args.method, args.seed),
+        (None, Some(env)) => {
+            let d = env.description();
+            settings.apply_preference(PreferenceRunConfig::declared(
+                d.declared_task(),
+                d.graph,
+                args.method,
+                args.seed,
+                d.spec.max_episode_steps as usize,
+            ))
+        }
+        (None, None) => Err("give --task, --env-url, or both".into()),
     };
-    for (k, v) in from_file.iter().chain(&args.overrides.overrides) {
-        config.set(k, v).map_err(anyhow::Error::msg)?;
-    }
+    let mut config = config.map_err(anyhow::Error::msg)?;
     if let Some(n) = args.trajectories {
         config.trajectories = usize::try_from(n)?;
     }
@@ -153,10 +173,19 @@ fn median(values: &mut [f64]) -> Option<f64> {
 }
 
 pub fn run(args: PrefsArgs) -> anyhow::Result<()> {
-    let config = resolve_config(&args)?;
+    let mut remote = args.remote.connect(args.task)?;
+    let config = resolve_config(&args, remote.as_ref())?;
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let start = Instant::now();
-    let mut run = PreferenceRun::new(config.clone());
+    let mut run = match remote.as_mut() {
+        None => PreferenceRun::new(config.clone()),
+        Some(env) => {
+            let trajs = PreferenceRun::record_trajectories_on(&config, env, &mut |_| {})
+                .context("recording the trajectories")?;
+            let pool = QueryPool::from_trajectories(&config.task, &trajs, config.min_run);
+            PreferenceRun::with_pool(config.clone(), pool)
+        }
+    };
     let mut oracle = SyntheticOracle::new(run.theta_true().to_vec());
     let graph = config.scene_graph;
 
@@ -172,7 +201,7 @@ pub fn run(args: PrefsArgs) -> anyhow::Result<()> {
         File::create(&jsonl_path).with_context(|| format!("creating {}", jsonl_path.display()))?,
     );
 
-    let label = format!("{} {} seed {}", args.task, args.method, args.seed);
+    let label = format!("{} {} seed {}", config.task, args.method, args.seed);
     let mut progress = Progress::new(u64::from(args.queries), label);
     let mut update_ms = Vec::new();
     while run.queries() < args.queries as usize {
@@ -193,7 +222,8 @@ pub fn run(args: PrefsArgs) -> anyhow::Result<()> {
     progress.finish();
 
     let summary = PrefsSummary {
-        task: args.task,
+        task: config.task.id().to_string(),
+        env_url: args.remote.env_url.clone(),
         method: args.method,
         seed: args.seed,
         queries: run.queries(),
@@ -205,7 +235,7 @@ pub fn run(args: PrefsArgs) -> anyhow::Result<()> {
         trajectories: run.pool().trajectories(),
         belief_update_ms_median: median(&mut update_ms),
         theta_true: run.theta_true().to_vec(),
-        feature_names: features::names(args.task),
+        feature_names: features::names_of(&config.task),
         wall_seconds: start.elapsed().as_secs_f64(),
         config,
     };

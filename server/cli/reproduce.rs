@@ -1,6 +1,7 @@
 //! `dualrep reproduce fig3|fig5`: runs the paper's experiment grid as `dualrep train` or
-//! `dualrep prefs` child processes, then writes `table.md` and the figure from every finished
-//! run. A grid stopped half-way resumes: finished runs (those with a `summary.json`) are skipped.
+//! `dualrep prefs` runs, as child processes here or as Slurm job array tasks (`--executor`),
+//! then writes `table.md` and the figure from every finished run. A grid stopped half-way
+//! resumes: finished runs (those with a `summary.json`) are skipped.
 
 mod progress;
 
@@ -13,13 +14,13 @@ use clap::Args;
 use crate::report::grid::{DEFAULT_QUERIES, Figure, GridConfig, RunSpec};
 use crate::report::methods::paper_dref_rate;
 use crate::report::run_files::{is_finished, read_train_summary, run_dir};
-use crate::report::runner::{Outcome, RunStatus, run_grid_with_env};
+use crate::report::runner::{Outcome, RunStatus, Waiting, run_grid};
 use crate::report::stats::mean_se;
 use crate::report::write_report;
-use crate::rl::kernels;
 use crate::sim::Task;
 
-use self::progress::{Progress, track};
+use self::progress::Progress;
+use super::grid_executor::{ExecutorArgs, ExecutorKind};
 
 #[derive(Debug, Args)]
 pub struct ReproduceArgs {
@@ -47,9 +48,6 @@ pub struct ReproduceArgs {
     /// DREF's runs on that task have finished.
     #[arg(long, value_delimiter = ',')]
     pub methods: Vec<String>,
-    /// Child processes at once [default: the number of CPUs].
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
-    pub jobs: Option<u64>,
     /// A hyper-parameter override passed to every run as `--set KEY=VALUE` (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
@@ -59,33 +57,25 @@ pub struct ReproduceArgs {
     /// Run nothing: write table.md and the figure from the runs already finished in OUT.
     #[arg(long)]
     pub report_only: bool,
-    /// The program to run as each child instead of this binary (tests, wrappers).
-    #[arg(long, hide = true)]
-    pub program: Option<PathBuf>,
+    #[command(flatten)]
+    pub executor: ExecutorArgs,
 }
 
 pub fn run(args: ReproduceArgs, compute: &super::compute::Compute) -> anyhow::Result<()> {
     if args.report_only {
+        if args.executor.no_wait {
+            bail!("--report-only runs nothing, so --no-wait has nothing to do");
+        }
         if !args.out.is_dir() {
             bail!("--report-only: {} is not a directory", args.out.display());
         }
         return report(args.figure, &args.out);
     }
     let config = grid_config(&args)?;
-    let program = match &args.program {
-        Some(p) => p.clone(),
-        None => std::env::current_exe().context("finding the dualrep binary to run")?,
-    };
-    let jobs = args.jobs.map_or_else(
-        || std::thread::available_parallelism().map_or(1, usize::from),
-        |j| j as usize,
-    );
-
+    let job_name = format!("dualrep-{}", config.figure.stem());
     // Each run gets the cores its share allows (one each when the jobs fill the machine), and
     // every run computes with the kernels chosen here.
-    let threads = compute
-        .threads
-        .unwrap_or_else(|| (kernels::cores() / jobs).clamp(1, 2));
+    let threads = args.executor.threads_per_run(compute.threads);
     let env = [
         ("DUALREP_THREADS".to_string(), threads.to_string()),
         (
@@ -93,9 +83,11 @@ pub fn run(args: ReproduceArgs, compute: &super::compute::Compute) -> anyhow::Re
             compute.path.name().to_string(),
         ),
     ];
+    let (mut executor, waiting) = args.executor.build(&config.out, &job_name, &env)?;
+
     let progress = Progress::new(config.total_runs());
     progress.line(&format!(
-        "{jobs} run(s) at once, each on {threads} thread(s) with the {} kernels",
+        "runs each on {threads} thread(s) with the {} kernels",
         compute.path
     ));
     let mut runs = config.initial_runs();
@@ -131,12 +123,24 @@ pub fn run(args: ReproduceArgs, compute: &super::compute::Compute) -> anyhow::Re
         ));
         config.matched_runs(task, rate)
     };
-    let mut running = Vec::new();
-    let outcomes = run_grid_with_env(&program, &env, runs, jobs, follow_up, |event| {
-        track(&mut running, &event);
-        progress.event(&event, &running);
+    if waiting == Waiting::UntilDone && args.executor.executor == ExecutorKind::Slurm {
+        progress.line(
+            "waiting for the Slurm queue (Ctrl-C stops the waiting, not the runs; the same \
+             command picks them up again)",
+        );
+    }
+    let grid = run_grid(&mut *executor, runs, waiting, follow_up, |event| {
+        progress.event(&event)
     });
     progress.finish();
+    let grid = grid.context(
+        "the grid stopped; runs already handed to the executor go on (Slurm keeps its \
+         queue), and the same command picks them up again",
+    )?;
+    if waiting == Waiting::NoWait {
+        return report_submitted(&config, &grid.outcomes, grid.in_flight, &dref_ended);
+    }
+    let outcomes = grid.outcomes;
 
     let failed: Vec<&Outcome> = outcomes
         .iter()
@@ -166,6 +170,43 @@ pub fn run(args: ReproduceArgs, compute: &super::compute::Compute) -> anyhow::Re
             outcomes.len()
         );
     }
+    Ok(())
+}
+
+/// After `--no-wait`: where the runs are, and what comes next.
+fn report_submitted(
+    config: &GridConfig,
+    outcomes: &[Outcome],
+    in_flight: usize,
+    dref_ended: &HashMap<Task, u64>,
+) -> anyhow::Result<()> {
+    let finished = outcomes
+        .iter()
+        .filter(|o| o.status == RunStatus::Skipped)
+        .count();
+    println!(
+        "{} runs: {in_flight} in the Slurm queue, {finished} already finished",
+        config.total_runs()
+    );
+    if config.wants_matched() && config.has_dref() {
+        let later: Vec<&str> = config
+            .tasks
+            .iter()
+            .filter(|t| dref_ended.get(t).copied().unwrap_or(0) < config.seeds)
+            .map(|t| t.id())
+            .collect();
+        if !later.is_empty() {
+            println!(
+                "EF at DREF's rate on {} is submitted by a later run of this command, once \
+                 DREF's runs there have finished",
+                later.join(", ")
+            );
+        }
+    }
+    println!(
+        "run the same command again to wait for the runs (it submits only what is missing or \
+         failed), or add --report-only for table.md and the figure from what has finished"
+    );
     Ok(())
 }
 

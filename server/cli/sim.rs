@@ -3,8 +3,9 @@
 use clap::Args;
 
 use super::overrides::parse_pair;
+use crate::settings::Settings;
+use crate::sim::Task;
 use crate::sim::rollout::{SimplePolicy, run_episodes_with};
-use crate::sim::{EnvOptions, Task};
 
 #[derive(Debug, Args)]
 pub struct SimArgs {
@@ -26,10 +27,9 @@ pub struct SimArgs {
 }
 
 pub fn run(args: SimArgs) -> anyhow::Result<()> {
-    let mut options = EnvOptions::default();
-    for (k, v) in &args.options {
-        options.set(args.task, k, v).map_err(anyhow::Error::msg)?;
-    }
+    let options = Settings::from_pairs(args.options.iter().map(|(k, v)| (k.as_str(), v.as_str())))
+        .and_then(|s| s.env_options(args.task))
+        .map_err(anyhow::Error::msg)?;
     let (summary, _) =
         run_episodes_with(args.task, &options, args.policy, args.episodes, args.seed);
     println!("{}", serde_json::to_string(&summary)?);

@@ -18,20 +18,22 @@ use serde::{Deserialize, Serialize};
 use super::output::{publish_summary, write_atomically};
 use super::overrides;
 use super::progress::Progress;
+use super::remote::RemoteArgs;
 use crate::guidance::evaluative_run::{EpisodeRecord, EvaluativeRun, EvaluativeRunConfig};
 use crate::guidance::evaluative_trainer::EvaluativeTrainer;
 pub use crate::guidance::evaluative_trainer::NoTrainer;
 use crate::guidance::expert_oracle::{ExpertOracle, OracleRule};
 use crate::guidance::feedback_schedule::EvaluativeMethod;
+use crate::remote_env::RemoteEnv;
 use crate::rl::Sac;
 use crate::rl::kernels::{self, KernelPath};
-use crate::sim::Task;
+use crate::sim::{Env, Task};
 
 #[derive(Debug, Args)]
 pub struct TrainArgs {
-    /// reaching, placing or lunar-lander.
+    /// reaching, placing or lunar-lander (with `--env-url`: the task the remote env copies).
     #[arg(long)]
-    pub task: Task,
+    pub task: Option<Task>,
     /// sac, dref or ef-<percent> (ef-100, ef-50, ef-25, ef-6.2, ...).
     #[arg(long)]
     pub method: EvaluativeMethod,
@@ -56,6 +58,8 @@ pub struct TrainArgs {
     /// run resumes instead of starting over.
     #[arg(long, default_value_t = 10_000)]
     pub checkpoint_every: u64,
+    #[command(flatten)]
+    pub remote: RemoteArgs,
 }
 
 /// The run checkpoint's file name inside OUT.
@@ -148,7 +152,11 @@ fn parse_oracle_rule(s: &str) -> Result<OracleRule, String> {
 /// `summary.json`.
 #[derive(Debug, Serialize)]
 pub struct TrainSummary {
-    pub task: Task,
+    /// The task's name (a declared task's: its env's id).
+    pub task: String,
+    /// The remote env the run stepped, if not our simulator.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub env_url: Option<String>,
     pub method: EvaluativeMethod,
     pub seed: u64,
     pub steps: u64,
@@ -176,20 +184,50 @@ pub fn resolve_config(
     seed: u64,
     args: &overrides::OverrideArgs,
 ) -> anyhow::Result<EvaluativeRunConfig> {
-    let mut config = EvaluativeRunConfig::new(task, method, seed);
-    let from_file = match &args.config {
-        Some(path) => overrides::read_toml(path)?,
-        None => Vec::new(),
-    };
-    for (k, v) in from_file.iter().chain(&args.overrides) {
-        overrides::apply(&mut config, k, v).map_err(anyhow::Error::msg)?;
-    }
-    Ok(config)
+    args.settings()?
+        .evaluative(task, method, seed)
+        .map_err(anyhow::Error::msg)
 }
 
 /// Load an expert written by `dualrep expert`.
-pub fn load_expert(path: &Path, task: Task) -> anyhow::Result<Sac> {
+pub fn load_expert(path: &Path, task: &str) -> anyhow::Result<Sac> {
     crate::session::load_expert(path, task).map_err(anyhow::Error::msg)
+}
+
+/// The run's config on a remote env: `task`'s (the env stands in for it), or the defaults for
+/// the task the env declared; then the TOML file and `--set`.
+pub fn resolve_remote_config(
+    env: &RemoteEnv,
+    task: Option<Task>,
+    method: EvaluativeMethod,
+    seed: u64,
+    args: &overrides::OverrideArgs,
+) -> anyhow::Result<EvaluativeRunConfig> {
+    match task {
+        Some(task) => resolve_config(task, method, seed, args),
+        None => {
+            let d = env.description();
+            let defaults = EvaluativeRunConfig::declared(d.declared_task(), d.graph, method, seed);
+            args.settings()?
+                .apply_evaluative(defaults)
+                .map_err(anyhow::Error::msg)
+        }
+    }
+}
+
+/// The expert the synthetic trainer consults: `--expert`, else `models/<task>.safetensors` in
+/// the current directory, else (for our tasks) the one inside the binary.
+fn find_expert(explicit: Option<&Path>, task: &str, builtin: Option<Task>) -> anyhow::Result<Sac> {
+    let local = PathBuf::from(format!("models/{task}.safetensors"));
+    match (explicit, builtin) {
+        (Some(path), _) => load_expert(path, task),
+        (None, _) if local.is_file() => load_expert(&local, task),
+        (None, Some(t)) => crate::session::load_task_expert(None, t).map_err(anyhow::Error::msg),
+        (None, None) => anyhow::bail!(
+            "{task} has no shipped expert: train one with `dualrep expert --env-url ... --out {}` or give --expert",
+            local.display()
+        ),
+    }
 }
 
 /// Run `run` to `steps`, writing finished episodes to `metrics.csv` in `out` (a new file, or
@@ -220,7 +258,9 @@ pub fn drive(
     let mut episodes = Vec::new();
     let mut progress = Progress::new(steps, label);
     while run.steps() < steps {
-        let report = run.step(trainer);
+        let report = run
+            .try_step(trainer)
+            .with_context(|| format!("{label}: at step {}", run.steps()))?;
         if let Some(e) = report.episode {
             writeln!(
                 csv,
@@ -270,19 +310,23 @@ pub fn final_performance(episodes: &[EpisodeRecord], n: usize) -> (f64, f64) {
 }
 
 pub fn run(args: TrainArgs) -> anyhow::Result<()> {
-    let config = resolve_config(args.task, args.method, args.seed, &args.overrides)?;
+    let remote = args.remote.connect(args.task)?;
+    let config = match (&remote, args.task) {
+        (Some(env), task) => {
+            resolve_remote_config(env, task, args.method, args.seed, &args.overrides)?
+        }
+        (None, Some(task)) => resolve_config(task, args.method, args.seed, &args.overrides)?,
+        (None, None) => unreachable!("RemoteArgs::connect asks for a task"),
+    };
+    let task_id = config.task.id().to_string();
     let mut trainer: Box<dyn EvaluativeTrainer> = match args.method {
         EvaluativeMethod::Sac => Box::new(NoTrainer),
         _ => {
-            let local = PathBuf::from(format!("models/{}.safetensors", args.task));
-            let expert = match &args.expert {
-                Some(path) => load_expert(path, args.task)?,
-                None if local.is_file() => load_expert(&local, args.task)?,
-                None => {
-                    crate::session::load_task_expert(None, args.task).map_err(anyhow::Error::msg)?
-                }
+            let expert = find_expert(args.expert.as_deref(), &task_id, args.task)?;
+            let act_dim = match &remote {
+                Some(env) => env.spec().action_space.dim(),
+                None => config.make_env().spec().action_space.dim(),
             };
-            let act_dim = config.make_env().spec().action_space.dim();
             Box::new(ExpertOracle::new(expert, act_dim, args.oracle))
         }
     };
@@ -292,7 +336,7 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
         serde_json::to_vec_pretty(&config)?,
     )?;
 
-    let label = format!("{} {} seed {}", args.task, args.method, args.seed);
+    let label = format!("{task_id} {} seed {}", args.method, args.seed);
     let checkpoint_path = args.out.join(CHECKPOINT_FILE);
     let saved = fs::read(&checkpoint_path);
     if let Ok(bytes) = &saved {
@@ -303,15 +347,17 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
         kernels::current_path(),
         kernels::threads_now()
     );
+    let remote_env = remote.map(|env| Box::new(env) as Box<dyn Env>);
     let (mut run, notes) = match saved {
         Ok(bytes) => {
-            let (run, notes) = EvaluativeRun::resume(&bytes, &config, trainer.as_mut())
-                .with_context(|| {
-                    format!(
-                        "resuming from {} (delete it to start the run over)",
-                        checkpoint_path.display()
-                    )
-                })?;
+            let (run, notes) =
+                EvaluativeRun::resume_with_env(&bytes, &config, remote_env, trainer.as_mut())
+                    .with_context(|| {
+                        format!(
+                            "resuming from {} (delete it to start the run over)",
+                            checkpoint_path.display()
+                        )
+                    })?;
             let notes: ResumeNotes = serde_json::from_value(notes)
                 .with_context(|| format!("reading the notes in {}", checkpoint_path.display()))?;
             keep_episodes(&args.out.join("metrics.csv"), run.episodes())?;
@@ -321,10 +367,13 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
             );
             (run, notes)
         }
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => (
-            EvaluativeRun::new(config.clone(), args.steps),
-            ResumeNotes::default(),
-        ),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            let run = match remote_env {
+                Some(env) => EvaluativeRun::with_env(config.clone(), env, args.steps)?,
+                None => EvaluativeRun::new(config.clone(), args.steps),
+            };
+            (run, ResumeNotes::default())
+        }
         Err(e) => {
             return Err(e).with_context(|| format!("reading {}", checkpoint_path.display()));
         }
@@ -345,7 +394,8 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
     let (final_mean_return, final_success_rate) =
         final_performance(&checkpointer.notes.recent_episodes, RECENT_EPISODES);
     let summary = TrainSummary {
-        task: args.task,
+        task: task_id,
+        env_url: args.remote.env_url.clone(),
         method: args.method,
         seed: args.seed,
         steps: run.steps(),

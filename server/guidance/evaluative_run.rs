@@ -20,7 +20,7 @@ use super::query_rule::{QueryRule, UcbForm};
 use crate::rl::replay::{ReplayBuffer, Transition};
 use crate::rl::{HumanCriticConfig, Sac, SacConfig, UpdateStats};
 use crate::scene_graph::{AbstractState, SceneGraph};
-use crate::sim::{Env, EnvOptions, Outcome, RenderState, Task};
+use crate::sim::{DeclaredTask, Env, EnvFault, EnvOptions, Outcome, RenderState, Task, TaskRef};
 
 /// DREF's query-rule constants (algorithms.md section 2, from the authors' configs).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -43,12 +43,18 @@ impl QueryRuleConfig {
             form: UcbForm::Authors,
         }
     }
+
+    /// A task an env declared: Placing's constants (c 0.2, k 4), the authors' largest c with a
+    /// k for a graph of a handful of predicates; set `c` and `k` for another.
+    pub fn for_declared() -> Self {
+        Self::for_task(Task::Placing)
+    }
 }
 
 /// Everything that defines a run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EvaluativeRunConfig {
-    pub task: Task,
+    pub task: TaskRef,
     pub method: EvaluativeMethod,
     pub seed: u64,
     pub sac: SacConfig,
@@ -78,7 +84,7 @@ impl EvaluativeRunConfig {
             _ => Some(HumanCriticConfig::default()),
         };
         Self {
-            task,
+            task: task.into(),
             method,
             seed,
             sac,
@@ -89,43 +95,53 @@ impl EvaluativeRunConfig {
         }
     }
 
-    /// Build the run's env.
-    pub fn make_env(&self) -> Box<dyn Env> {
-        self.task.make_env_with(&self.env)
+    /// The defaults for a task an env in another process declared, with its `graph`:
+    /// stable-baselines3's SAC (two layers of 256, learning rate 3e-4, batch 256, tau 0.005)
+    /// and [`QueryRuleConfig::for_declared`].
+    pub fn declared(
+        task: DeclaredTask,
+        graph: SceneGraph,
+        method: EvaluativeMethod,
+        seed: u64,
+    ) -> Self {
+        let sac = SacConfig {
+            hidden: vec![256, 256],
+            learning_rate: 3e-4,
+            batch_size: 256,
+            buffer_size: 1_000_000,
+            tau: 0.005,
+            gamma: 0.99,
+            learning_starts: 0,
+            gradient_steps: 1,
+            init_ent_coef: 1.0,
+            target_entropy: None,
+            human_critic: match method {
+                EvaluativeMethod::Sac => None,
+                _ => Some(HumanCriticConfig::default()),
+            },
+        };
+        Self {
+            task: TaskRef::Declared(task),
+            method,
+            seed,
+            sac,
+            query_rule: QueryRuleConfig::for_declared(),
+            scene_graph: graph,
+            env: EnvOptions::default(),
+            reward_scale: 1.0,
+        }
     }
 
-    /// Override one hyper-parameter by name (`--set`, TOML files, the server's `params`): the
-    /// query rule's, scene graph's, env's and reward scale's keys here, every other key to SAC.
-    pub fn set(&mut self, key: &str, value: &str) -> Result<(), String> {
-        let bad = |what: &str| format!("{key}={value}: expected {what}");
-        match key {
-            "c" => self.query_rule.c = value.parse().map_err(|_| bad("a number"))?,
-            "k" => self.query_rule.k = value.parse().map_err(|_| bad("a non-negative integer"))?,
-            "ucb" => {
-                self.query_rule.form = match value {
-                    "authors" => UcbForm::Authors,
-                    "paper" => UcbForm::Paper,
-                    _ => return Err(bad("authors or paper")),
-                }
-            }
-            "side_engines_on_a0" => {
-                let on: bool = value.parse().map_err(|_| bad("true or false"))?;
-                match &mut self.scene_graph {
-                    SceneGraph::LunarLander { side_engines_on_a0 } => *side_engines_on_a0 = on,
-                    _ => return Err(format!("{key} applies to lunar-lander only")),
-                }
-            }
-            "reward_scale" => {
-                self.reward_scale = value
-                    .parse::<f32>()
-                    .ok()
-                    .filter(|x| x.is_finite() && *x > 0.0)
-                    .ok_or_else(|| bad("a positive number"))?
-            }
-            _ if EnvOptions::owns(key) => self.env.set(self.task, key, value)?,
-            _ => self.sac.set(key, value)?,
+    /// Build the run's env on our simulator. Panics for a declared task, whose env lives in
+    /// another process: build that run with [`EvaluativeRun::with_env`].
+    pub fn make_env(&self) -> Box<dyn Env> {
+        match &self.task {
+            TaskRef::Builtin(task) => task.make_env_with(&self.env),
+            TaskRef::Declared(d) => panic!(
+                "task {} lives in another process: give its env to EvaluativeRun::with_env",
+                d.env
+            ),
         }
-        Ok(())
     }
 }
 
@@ -196,7 +212,17 @@ impl EvaluativeRun {
     /// A fresh run whose replay buffer holds at most `min(buffer_size, steps)` transitions:
     /// a short run does not preallocate the full million rows.
     pub fn new(config: EvaluativeRunConfig, steps: u64) -> Self {
-        let mut env = config.make_env();
+        let env = config.make_env();
+        Self::with_env(config, env, steps).expect("the built-in tasks never fail")
+    }
+
+    /// A fresh run on `env` (an env in another process, or any other `Env`); the first reset
+    /// can fail for an env that can.
+    pub fn with_env(
+        config: EvaluativeRunConfig,
+        mut env: Box<dyn Env>,
+        steps: u64,
+    ) -> Result<Self, EnvFault> {
         let (obs_dim, act_dim) = (
             env.spec().observation_space.dim(),
             env.spec().action_space.dim(),
@@ -209,8 +235,8 @@ impl EvaluativeRun {
             FeedbackSchedule::new(config.method, QueryRule::new(q.c, q.k, q.form), config.seed);
         let mut episode_seeds = ChaCha8Rng::seed_from_u64(config.seed ^ 0xe915_0de5_eed5_0000);
         let episode_seed = episode_seeds.random();
-        let obs = env.reset(episode_seed);
-        Self {
+        let obs = env.try_reset(episode_seed)?;
+        Ok(Self {
             config,
             env,
             learner,
@@ -228,7 +254,7 @@ impl EvaluativeRun {
             feedback_count: 0,
             no_feedback_count: 0,
             queried: Vec::new(),
-        }
+        })
     }
 
     pub fn config(&self) -> &EvaluativeRunConfig {
@@ -266,8 +292,24 @@ impl EvaluativeRun {
         self.env.as_ref()
     }
 
-    /// Take one environment step and one learning step.
+    /// The env, to change how it renders (a remote env sends frames only when asked).
+    pub fn env_mut(&mut self) -> &mut dyn Env {
+        self.env.as_mut()
+    }
+
+    /// Take one environment step and one learning step (on an env that cannot fail: the
+    /// built-in tasks; use [`EvaluativeRun::try_step`] with any other).
     pub fn step(&mut self, trainer: &mut dyn EvaluativeTrainer) -> StepReport {
+        self.try_step(trainer)
+            .unwrap_or_else(|fault| panic!("the environment failed: {fault}"))
+    }
+
+    /// Take one environment step and one learning step. When the env fails, the run is left
+    /// mid-step (its policy's random stream has moved on): resume from a checkpoint.
+    pub fn try_step(
+        &mut self,
+        trainer: &mut dyn EvaluativeTrainer,
+    ) -> Result<StepReport, EnvFault> {
         let uses_human_critic = self.config.sac.human_critic.is_some();
         self.learner.act(&self.obs, false, &mut self.action);
         let predicted = if uses_human_critic {
@@ -275,8 +317,11 @@ impl EvaluativeRun {
         } else {
             0.0
         };
-        let step = self.env.step(&self.action);
-        let g = self.config.scene_graph.evaluate(&step.obs, &self.action);
+        let step = self.env.try_step(&self.action)?;
+        let g = self
+            .config
+            .scene_graph
+            .after_step(self.env.as_ref(), &step.obs, &self.action);
 
         let evaluation = if self.schedule.should_ask(g) {
             let query = EvaluativeQuery {
@@ -315,18 +360,21 @@ impl EvaluativeRun {
         self.episode_return += f64::from(step.reward);
         self.episode_length += 1;
         let final_state = step.outcome.map(|_| self.env.render());
-        let episode = step.outcome.map(|outcome| self.finish_episode(outcome));
-        if episode.is_none() {
-            self.obs.copy_from_slice(&step.obs);
-        }
-        StepReport {
+        let episode = match step.outcome {
+            Some(outcome) => Some(self.finish_episode(outcome)?),
+            None => {
+                self.obs.copy_from_slice(&step.obs);
+                None
+            }
+        };
+        Ok(StepReport {
             reward: step.reward,
             abstract_state: g,
             evaluation,
             update,
             episode,
             final_state,
-        }
+        })
     }
 
     /// Change the answer to query `query` (0-based, in the order asked) to `new`
@@ -355,7 +403,9 @@ impl EvaluativeRun {
         Some(self.replay.human(slot))
     }
 
-    fn finish_episode(&mut self, outcome: Outcome) -> EpisodeRecord {
+    /// Count the finished episode and reset for the next. A failed reset leaves the run counted
+    /// up to the episode's end but with no episode under way: resume from a checkpoint.
+    fn finish_episode(&mut self, outcome: Outcome) -> Result<EpisodeRecord, EnvFault> {
         self.cumulative_return += self.episode_return;
         let record = EpisodeRecord {
             step: self.steps,
@@ -372,8 +422,8 @@ impl EvaluativeRun {
         self.episode_return = 0.0;
         self.episode_length = 0;
         self.episode_seed = self.episode_seeds.random();
-        self.obs = self.env.reset(self.episode_seed);
-        record
+        self.obs = self.env.try_reset(self.episode_seed)?;
+        Ok(record)
     }
 }
 
@@ -394,13 +444,24 @@ pub fn evaluate_policy(
     seed: u64,
 ) -> (f64, f64) {
     let mut env = task.make_env_with(options);
+    evaluate_policy_on(env.as_mut(), learner, episodes, seed)
+        .expect("the built-in tasks never fail")
+}
+
+/// [`evaluate_policy`] on a given env (one in another process, say).
+pub fn evaluate_policy_on(
+    env: &mut dyn Env,
+    learner: &mut Sac,
+    episodes: u32,
+    seed: u64,
+) -> Result<(f64, f64), EnvFault> {
     let mut action = vec![0.0; env.spec().action_space.dim()];
     let (mut total, mut successes) = (0.0f64, 0u32);
     for i in 0..u64::from(episodes) {
-        let mut obs = env.reset(seed.wrapping_add(i));
+        let mut obs = env.try_reset(seed.wrapping_add(i))?;
         loop {
             learner.act(&obs, true, &mut action);
-            let step = env.step(&action);
+            let step = env.try_step(&action)?;
             total += f64::from(step.reward);
             if let Some(outcome) = step.outcome {
                 successes += u32::from(outcome == Outcome::Success);
@@ -410,7 +471,7 @@ pub fn evaluate_policy(
         }
     }
     let n = f64::from(episodes.max(1));
-    (total / n, f64::from(successes) / n)
+    Ok((total / n, f64::from(successes) / n))
 }
 
 #[path = "run_checkpoint.rs"]

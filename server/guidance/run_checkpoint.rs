@@ -153,6 +153,18 @@ impl EvaluativeRun {
         config: &EvaluativeRunConfig,
         trainer: &mut dyn EvaluativeTrainer,
     ) -> Result<(Self, serde_json::Value), RunCheckpointError> {
+        Self::resume_with_env(bytes, config, None, trainer)
+    }
+
+    /// [`EvaluativeRun::resume`] on `env` when given (an env in another process: connected
+    /// again, it starts the checkpoint's episode from its reset seed), else on a new env of the
+    /// config's task.
+    pub fn resume_with_env(
+        bytes: &[u8],
+        config: &EvaluativeRunConfig,
+        env: Option<Box<dyn crate::sim::Env>>,
+        trainer: &mut dyn EvaluativeTrainer,
+    ) -> Result<(Self, serde_json::Value), RunCheckpointError> {
         let err = |m: String| RunCheckpointError(m);
         let rest = bytes
             .strip_prefix(MAGIC)
@@ -161,6 +173,12 @@ impl EvaluativeRun {
         let (learner, rows) = split_blob(rest).ok_or_else(|| err("truncated learner".into()))?;
         let state: RunState =
             serde_json::from_slice(state).map_err(|e| err(format!("state: {e}")))?;
+        if (&state.config.task, state.config.scene_graph) != (&config.task, config.scene_graph) {
+            // A remote env that describes itself otherwise than when the run began.
+            return Err(err(
+                "the task or its scene graph is not the one the run was saved with (an env in another process that now declares other predicates, features or sizes?)".into(),
+            ));
+        }
         if state.config != *config {
             return Err(err("it belongs to a run with another configuration".into()));
         }
@@ -170,9 +188,11 @@ impl EvaluativeRun {
         let episode_seeds: ChaCha8Rng = state.episode_seeds.restore().map_err(err)?;
         trainer.restore_state(&state.trainer).map_err(err)?;
 
-        let mut env = state.config.make_env();
+        let mut env = env.unwrap_or_else(|| state.config.make_env());
         let act_dim = env.spec().action_space.dim();
-        let obs = env.reset(state.episode_seed);
+        let obs = env
+            .try_reset(state.episode_seed)
+            .map_err(|fault| err(format!("resetting the environment: {fault}")))?;
         let run = Self {
             config: state.config,
             env,
@@ -342,6 +362,10 @@ mod tests {
                 .to_string()
         };
         assert!(refused(&bytes, &other, &mut trainer).contains("another configuration"));
+        // A remote env that comes back declaring another scene graph.
+        let mut redeclared = config.clone();
+        redeclared.scene_graph = crate::scene_graph::SceneGraph::Reaching;
+        assert!(refused(&bytes, &redeclared, &mut trainer).contains("scene graph"));
         assert!(refused(&bytes[..bytes.len() - 4], &config, &mut trainer).contains("replay"));
         assert!(refused(&bytes[..40], &config, &mut trainer).contains("truncated"));
         assert!(refused(b"hello", &config, &mut trainer).contains("not a dualrep"));

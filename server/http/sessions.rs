@@ -1,7 +1,5 @@
 //! `/api/sessions`: launch, list, inspect, stop, resume; episodes, answers, export.
 
-use std::collections::BTreeMap;
-
 use axum::Json;
 use axum::extract::rejection::JsonRejection;
 use axum::extract::{Path, Query, State};
@@ -12,16 +10,28 @@ use serde::{Deserialize, Serialize};
 use super::AppState;
 use super::auth::SessionAccess;
 use super::error::{ApiError, ApiResult};
+use super::openapi::ErrorBody;
+use crate::remote_env::RemoteTarget;
 use crate::session::spec::DEFAULT_QUERIES;
 use crate::session::{SessionMethod, SessionSpec, TrainerKind};
+use crate::settings::Settings;
 use crate::sim::Task;
-use crate::store::{AnswerCounts, SessionRow, Status, Survey};
+use crate::store::{AlignmentRow, AnswerCounts, AnswerRow, EpisodeRow, SessionRow, Status, Survey};
 
-/// `POST /api/sessions`.
-#[derive(Debug, Deserialize)]
+/// What to train, how, with whom, and for how long.
+#[derive(Debug, Deserialize, utoipa::ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LaunchRequest {
-    pub task: Task,
+    /// A built-in task; with `env`, the task that env stands in for (its scene graph,
+    /// features and expert). Give a task, an env, or both.
+    #[serde(default)]
+    pub task: Option<Task>,
+    /// An environment in another process (`{"url": "tcp://HOST:PORT"}`, see
+    /// `docs/env-protocol.md`) instead of our simulator.
+    #[serde(default)]
+    pub env: Option<RemoteTarget>,
+    /// dref, ef-<percent> (ef-100, ef-50, ef-6.2, ...), sac, drpl, drpl-ss, fragment or full.
+    #[schema(value_type = String, example = "dref")]
     pub method: SessionMethod,
     pub trainer: TrainerKind,
     #[serde(default)]
@@ -30,48 +40,72 @@ pub struct LaunchRequest {
     pub steps: Option<u64>,
     /// Queries (preference methods) [default: 40].
     pub queries: Option<u64>,
+    /// Session settings and hyper-parameters by name (`GET /api/tasks` lists them with their
+    /// defaults). A setting that is unknown, of the wrong type or out of range makes an invalid
+    /// session (422).
+    // Read into `Settings` by `into_spec`, so that a bad setting is a 422, not a malformed body.
     #[serde(default)]
-    pub params: BTreeMap<String, serde_json::Value>,
+    #[schema(value_type = Option<Settings>)]
+    pub params: serde_json::Value,
+}
+
+/// A launched session.
+#[derive(Debug, Serialize, utoipa::ToSchema)]
+pub struct Launched {
+    pub id: String,
+    pub status: Status,
+    /// The trainer's link (path and per-session token), relative to the server.
+    pub trainer_url: String,
 }
 
 impl LaunchRequest {
-    pub fn into_spec(self) -> Result<SessionSpec, String> {
+    pub fn into_spec(self) -> Result<SessionSpec, ApiError> {
+        let params = match self.params {
+            serde_json::Value::Null => Settings::default(),
+            params => Settings::from_json(params)
+                .map_err(|e| ApiError::InvalidSession(format!("params: {e}")))?,
+        };
         let budget = if self.method.is_preference() {
             if self.steps.is_some() {
-                return Err(format!(
+                return Err(ApiError::BadRequest(format!(
                     "{} asks queries: give `queries`, not `steps`",
                     self.method
-                ));
+                )));
             }
             self.queries.unwrap_or(DEFAULT_QUERIES as u64)
         } else {
             if self.queries.is_some() {
-                return Err(format!(
+                return Err(ApiError::BadRequest(format!(
                     "{} takes environment steps: give `steps`, not `queries`",
                     self.method
-                ));
+                )));
             }
             self.steps.unwrap_or(match self.task {
-                Task::LunarLander => 150_000,
-                Task::Reaching | Task::Placing => 100_000,
+                Some(Task::LunarLander) => 150_000,
+                Some(Task::Reaching | Task::Placing) | None => 100_000,
             })
         };
         Ok(SessionSpec {
             task: self.task,
+            env: self.env,
             method: self.method,
             trainer: self.trainer,
             seed: self.seed,
             budget,
-            params: self.params,
+            params,
         })
     }
 }
 
 /// A session as the API shows it.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, utoipa::ToSchema)]
 pub struct SessionView {
     pub id: String,
+    /// The task (`remote`: a remote env's own task).
     pub task: String,
+    /// The remote env the session steps, if not our simulator.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub env: Option<RemoteTarget>,
     pub method: String,
     pub trainer: String,
     pub seed: i64,
@@ -82,9 +116,12 @@ pub struct SessionView {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,
     pub progress: i64,
+    /// The settings it was launched with.
+    #[schema(value_type = Settings)]
     pub params: serde_json::Value,
     pub answers: AnswerCounts,
     /// The latest metrics: answered, feedback fraction, recent returns, alignment.
+    #[schema(value_type = Object)]
     pub latest: serde_json::Value,
     pub trainer_url: String,
     pub created_at: String,
@@ -117,6 +154,10 @@ async fn view(state: &AppState, row: SessionRow) -> ApiResult<SessionView> {
         unit: row.spec().map_or("steps", |s| s.method.budget_unit()),
         trainer_url: trainer_url(&row),
         params: row.config.get("params").cloned().unwrap_or_default(),
+        env: row
+            .config
+            .get("env")
+            .and_then(|env| serde_json::from_value(env.clone()).ok()),
         id: row.id,
         task: row.task,
         method: row.method,
@@ -144,23 +185,45 @@ async fn row(state: &AppState, id: &str) -> ApiResult<SessionRow> {
         .ok_or_else(|| ApiError::NotFound(format!("no session {id}")))
 }
 
+/// Launch a session: it queues, then runs on its own thread when a slot is free.
+#[utoipa::path(
+    post,
+    path = "/api/sessions",
+    tag = "sessions",
+    request_body = LaunchRequest,
+    responses(
+        (status = 201, description = "Queued", body = Launched),
+        (status = "default", description = "An error", body = ErrorBody)
+    )
+)]
 pub async fn create(
     State(state): State<AppState>,
     body: Result<Json<LaunchRequest>, JsonRejection>,
-) -> ApiResult<(StatusCode, Json<serde_json::Value>)> {
+) -> ApiResult<(StatusCode, Json<Launched>)> {
     let Json(request) = body.map_err(|e| match e.status() {
         StatusCode::PAYLOAD_TOO_LARGE => ApiError::PayloadTooLarge(super::MAX_BODY_BYTES),
         _ => ApiError::BadRequest(e.body_text()),
     })?;
-    let spec = request.into_spec().map_err(ApiError::BadRequest)?;
+    let spec = request.into_spec()?;
     let row = state.hub.launch(spec).await?;
     let status = state.hub.status_of(&row);
     Ok((
         StatusCode::CREATED,
-        Json(serde_json::json!({"id": row.id, "status": status, "trainer_url": trainer_url(&row)})),
+        Json(Launched {
+            trainer_url: trainer_url(&row),
+            id: row.id,
+            status,
+        }),
     ))
 }
 
+/// Every session, newest first.
+#[utoipa::path(
+    get,
+    path = "/api/sessions",
+    tag = "sessions",
+    responses((status = 200, description = "Sessions", body = Vec<SessionView>), (status = "default", description = "An error", body = ErrorBody))
+)]
 pub async fn list(State(state): State<AppState>) -> ApiResult<Json<Vec<SessionView>>> {
     let mut out = Vec::new();
     for r in state.store.sessions().await? {
@@ -169,6 +232,14 @@ pub async fn list(State(state): State<AppState>) -> ApiResult<Json<Vec<SessionVi
     Ok(Json(out))
 }
 
+/// A session: status, progress, answer counts, latest metrics.
+#[utoipa::path(
+    get,
+    path = "/api/sessions/{id}",
+    tag = "sessions",
+    params(("id" = String, Path, description = "The session")),
+    responses((status = 200, description = "The session", body = SessionView), (status = "default", description = "An error", body = ErrorBody))
+)]
 pub async fn get(
     State(state): State<AppState>,
     Path(id): Path<String>,
@@ -177,6 +248,14 @@ pub async fn get(
     Ok(Json(view(&state, r).await?))
 }
 
+/// Stop a queued or running session.
+#[utoipa::path(
+    post,
+    path = "/api/sessions/{id}/stop",
+    tag = "sessions",
+    params(("id" = String, Path, description = "The session")),
+    responses((status = 200, description = "The session", body = SessionView), (status = "default", description = "An error", body = ErrorBody))
+)]
 pub async fn stop(
     State(state): State<AppState>,
     Path(id): Path<String>,
@@ -186,6 +265,15 @@ pub async fn stop(
     Ok(Json(view(&state, r).await?))
 }
 
+/// Resume an interrupted, stopped or failed session; stored answers are replayed, never
+/// asked again.
+#[utoipa::path(
+    post,
+    path = "/api/sessions/{id}/resume",
+    tag = "sessions",
+    params(("id" = String, Path, description = "The session")),
+    responses((status = 200, description = "The session", body = SessionView), (status = "default", description = "An error", body = ErrorBody))
+)]
 pub async fn resume(
     State(state): State<AppState>,
     Path(id): Path<String>,
@@ -194,6 +282,14 @@ pub async fn resume(
     Ok(Json(view(&state, r).await?))
 }
 
+/// The session's finished episodes.
+#[utoipa::path(
+    get,
+    path = "/api/sessions/{id}/episodes",
+    tag = "sessions",
+    params(("id" = String, Path, description = "The session")),
+    responses((status = 200, description = "Episodes", body = Vec<EpisodeRow>), (status = "default", description = "An error", body = ErrorBody))
+)]
 pub async fn episodes(
     State(state): State<AppState>,
     Path(id): Path<String>,
@@ -202,13 +298,28 @@ pub async fn episodes(
     Ok(Json(state.store.episodes(&id).await?).into_response())
 }
 
+/// Answered queries in the order asked.
+#[utoipa::path(
+    get,
+    path = "/api/sessions/{id}/answers",
+    tag = "sessions",
+    params(("id" = String, Path, description = "The session")),
+    responses((status = 200, description = "Answers", body = Vec<AnswerRow>), (status = "default", description = "An error", body = ErrorBody))
+)]
 pub async fn answers(State(state): State<AppState>, Path(id): Path<String>) -> ApiResult<Response> {
     row(&state, &id).await?;
     Ok(Json(state.store.answers(&id).await?).into_response())
 }
 
 /// `GET .../alignment`: a preference session's posterior alignment after every answer (and
-/// after every undo), oldest first.
+/// after every undo), oldest first (empty for evaluative sessions).
+#[utoipa::path(
+    get,
+    path = "/api/sessions/{id}/alignment",
+    tag = "sessions",
+    params(("id" = String, Path, description = "The session")),
+    responses((status = 200, description = "Alignment by query", body = Vec<AlignmentRow>), (status = "default", description = "An error", body = ErrorBody))
+)]
 pub async fn alignment(
     State(state): State<AppState>,
     Path(id): Path<String>,
@@ -217,13 +328,27 @@ pub async fn alignment(
     Ok(Json(state.store.alignment(&id).await?).into_response())
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, utoipa::IntoParams)]
 pub struct ExportQuery {
+    /// `jsonl` (default) or `csv`.
     pub format: Option<String>,
 }
 
 /// `GET .../export?format=jsonl|csv`: JSONL holds the session, then every answer and episode,
 /// one record per line (`"record"` names it); CSV holds the answers.
+#[utoipa::path(
+    get,
+    path = "/api/sessions/{id}/export",
+    tag = "sessions",
+    params(("id" = String, Path, description = "The session"), ExportQuery),
+    responses(
+        (status = 200, description = "JSONL: the session, then every answer and episode, one record per line (`record` names it); CSV: the answers", content(
+            (String = "application/x-ndjson"),
+            (String = "text/csv")
+        )),
+        (status = "default", description = "An error", body = ErrorBody)
+    )
+)]
 pub async fn export(
     State(state): State<AppState>,
     Path(id): Path<String>,
@@ -259,7 +384,6 @@ pub async fn export(
             let io = |e: csv::Error| ApiError::ExportFailed(e.to_string());
             w.write_record([
                 "query_id",
-                "seq",
                 "kind",
                 "step",
                 "abstract_state",
@@ -275,7 +399,6 @@ pub async fn export(
                 let value = serde_json::to_string(&a.value).unwrap_or_default();
                 w.write_record([
                     a.query_id.to_string(),
-                    a.seq.to_string(),
                     a.kind.as_str().to_string(),
                     a.step.to_string(),
                     a.abstract_state.to_string(),
@@ -318,6 +441,15 @@ pub async fn export(
 
 /// `POST /api/sessions/{id}/survey`: the trainer (its session token) or a researcher stores the
 /// answers to the three questions, once the session has ended.
+#[utoipa::path(
+    post,
+    path = "/api/sessions/{id}/survey",
+    tag = "trainers",
+    params(("id" = String, Path, description = "The session")),
+    security(("bearer" = [])),
+    request_body = Survey,
+    responses((status = 200, description = "The session, with `survey` (bearer: the session's trainer token or the researcher token)", body = SessionView), (status = "default", description = "An error", body = ErrorBody))
+)]
 pub async fn survey(
     State(state): State<AppState>,
     SessionAccess(r): SessionAccess,
@@ -337,6 +469,13 @@ pub async fn survey(
 
 /// `GET .../episodes/{n}/frames`: an episode of a human session as `{geometry, frames}`, for
 /// replay in the review page.
+#[utoipa::path(
+    get,
+    path = "/api/sessions/{id}/episodes/{episode}/frames",
+    tag = "sessions",
+    params(("id" = String, Path, description = "The session"), ("episode" = u64, Path, description = "The episode, from 0")),
+    responses((status = 200, description = "`{geometry, frames}`", body = Object), (status = "default", description = "An error", body = ErrorBody))
+)]
 pub async fn episode_frames(
     State(state): State<AppState>,
     Path((id, episode)): Path<(String, u64)>,

@@ -10,7 +10,7 @@ use tokio::time::Instant;
 
 use super::handle::AnswerReply;
 use super::owner::{Open, Owner};
-use crate::protocol::{ErrorCode, ProtocolError, ServerMessage, WithdrawReason};
+use crate::protocol::{ErrorCode, ProtocolError, QueryId, ServerMessage, WithdrawReason};
 use crate::session::events::Revision;
 use crate::session::{AnswerValue, Answerer, Control, QueryKind};
 use crate::store::{CommitOutcome, ReanswerOutcome, Status, UndoOutcome};
@@ -38,7 +38,7 @@ fn refuse(code: ErrorCode, message: impl Into<String>) -> AnswerReply {
 }
 
 /// The refusal for a value of the wrong kind.
-fn bad_value(id: i64, kind: QueryKind) -> ProtocolError {
+fn bad_value(id: QueryId, kind: QueryKind) -> ProtocolError {
     ProtocolError::new(
         ErrorCode::BadValue,
         format!(
@@ -53,7 +53,7 @@ fn bad_value(id: i64, kind: QueryKind) -> ProtocolError {
 }
 
 /// The reply to an answer for a query already answered with `stored`.
-fn repeat(id: i64, value: AnswerValue, stored: AnswerValue) -> AnswerReply {
+fn repeat(id: QueryId, value: AnswerValue, stored: AnswerValue) -> AnswerReply {
     if stored == value {
         AnswerReply::Ack(value)
     } else {
@@ -71,7 +71,7 @@ impl Owner {
     /// A trainer's answer to query `id`: the reply, and what to deliver once it is sent.
     pub(super) async fn answer(
         &mut self,
-        id: i64,
+        id: QueryId,
         value: AnswerValue,
     ) -> (AnswerReply, Option<Delivery>) {
         if !self.status.is_active() {
@@ -83,7 +83,7 @@ impl Owner {
     /// Commit `value` for query `id` on behalf of `who` (a trainer or the timeout).
     async fn commit(
         &mut self,
-        id: i64,
+        id: QueryId,
         value: AnswerValue,
         who: Answerer,
     ) -> (AnswerReply, Option<Delivery>) {
@@ -102,7 +102,7 @@ impl Owner {
         }
         match self
             .store
-            .commit_answer(id, &self.id, value, who, latency_ms)
+            .commit_answer(open.row, &self.id, value, who, latency_ms)
             .await
         {
             Ok(CommitOutcome::Committed) => (
@@ -145,7 +145,7 @@ impl Owner {
         self.remember(&open, value, reason);
         if let Some(control) = &self.control {
             let _ = control.send(Control::Answer {
-                seq: open.seq,
+                seq: open.id,
                 value,
             });
         }
@@ -165,7 +165,7 @@ impl Owner {
     /// like any answer so that exactly one answer stands.
     pub(super) async fn expire_due(&mut self) {
         let now = Instant::now();
-        let due: Vec<i64> = [&self.pending, &self.reopened]
+        let due: Vec<QueryId> = [&self.pending, &self.reopened]
             .into_iter()
             .flatten()
             .filter(|p| p.deadline <= now)
@@ -202,7 +202,7 @@ impl Owner {
         latency_ms: u64,
     ) -> AnswerReply {
         let id = open.id;
-        let revision = match self.store.reanswer(id, value, who, latency_ms).await {
+        let revision = match self.store.reanswer(open.row, value, who, latency_ms).await {
             Ok(ReanswerOutcome::Committed(r)) => r,
             Ok(ReanswerOutcome::Stands(stored)) => {
                 self.reopened = None;
@@ -221,7 +221,7 @@ impl Owner {
         self.remember(&open, value, reason);
         if let Some(control) = &self.control {
             let _ = control.send(Control::Revise(Revision {
-                seq: open.seq,
+                seq: id,
                 revision,
                 value: Some(value),
             }));
@@ -237,7 +237,7 @@ impl Owner {
     /// Take back the answer to `id`: allowed for the latest answer a trainer gave, within
     /// [`UNDO_WINDOW`], while the session runs. Every browser gets `undone` and the query
     /// again, which times out like any query.
-    pub(super) async fn undo(&mut self, id: i64) -> Result<(), ProtocolError> {
+    pub(super) async fn undo(&mut self, id: QueryId) -> Result<(), ProtocolError> {
         let unavailable = |message: String| ProtocolError::new(ErrorCode::UndoUnavailable, message);
         if !self.status.is_active() {
             return Err(unavailable(
@@ -260,7 +260,7 @@ impl Owner {
             }
         };
         let q = &undoable.query;
-        let revision = match self.store.undo_answer(id, &self.id, self.kind).await {
+        let revision = match self.store.undo_answer(q.row, &self.id, self.kind).await {
             Ok(UndoOutcome::Undone(r)) => r,
             Ok(UndoOutcome::NotAnswered | UndoOutcome::AlreadyUndone) => {
                 return Err(unavailable(format!("query {id} has no answer to undo")));
@@ -274,13 +274,13 @@ impl Owner {
                 ));
             }
         };
-        let reopened = Open::new(id, q.seq, q.text.clone(), self.answer_timeout);
+        let reopened = Open::new(id, q.row, q.text.clone(), self.answer_timeout);
         self.progress.answered = self.progress.answered.saturating_sub(1);
         self.recent.retain(|(q, _)| *q != id);
         self.reopened = Some(reopened.clone());
         if let Some(control) = &self.control {
             let _ = control.send(Control::Revise(Revision {
-                seq: q.seq,
+                seq: id,
                 revision,
                 value: None,
             }));
@@ -291,7 +291,7 @@ impl Owner {
     }
 
     /// An answer for a query that is not open: a repeat, someone else's, or nonsense.
-    async fn answer_not_pending(&self, id: i64, value: AnswerValue) -> AnswerReply {
+    async fn answer_not_pending(&self, id: QueryId, value: AnswerValue) -> AnswerReply {
         if let Some(stored) = self
             .recent
             .iter()
@@ -301,7 +301,7 @@ impl Owner {
         {
             return repeat(id, value, stored);
         }
-        let query = match self.store.query(id).await {
+        let query = match self.store.query_by_number(&self.id, id).await {
             Ok(q) => q,
             Err(e) => {
                 tracing::error!("looking up query {id}: {e}");
@@ -312,7 +312,7 @@ impl Owner {
             }
         };
         match query {
-            Some(q) if q.session_id == self.id => match self.store.answer_value(id).await {
+            Some(q) => match self.store.answer_value(q.id).await {
                 // Answered already (by this trainer, another one, or a timeout).
                 Ok(Some(stored)) => repeat(id, value, stored),
                 // Asked and not open: its session ended while it waited; a resume asks again.

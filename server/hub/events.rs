@@ -31,8 +31,9 @@ impl Owner {
 
     async fn apply_event(&mut self, event: SessionEvent) -> Result<(), sqlx::Error> {
         match event {
-            SessionEvent::Started { replayed } => {
+            SessionEvent::Started { replayed, graph } => {
                 self.progress.answered = replayed;
+                self.graph = Some(graph);
                 self.set_status(Status::Running, None).await;
             }
             SessionEvent::Frame(frame) => {
@@ -50,14 +51,13 @@ impl Owner {
                 content,
             } => {
                 let payload = serde_json::to_string(&content).expect("query content serialises");
-                let query_id = self
+                let row = self
                     .store
                     .upsert_query(&self.id, seq, self.kind, step, abstract_state, &payload)
                     .await?;
                 let timeout = self.answer_timeout;
                 let text: Arc<str> = ServerMessage::Query(Box::new(QueryMessage {
-                    id: query_id,
-                    seq,
+                    id: seq,
                     step,
                     abstract_state,
                     expires_in_ms: timeout.as_millis() as u64,
@@ -65,7 +65,7 @@ impl Owner {
                 }))
                 .to_text()
                 .into();
-                self.pending = Some(Open::new(query_id, seq, text.clone(), timeout));
+                self.pending = Some(Open::new(seq, row, text.clone(), timeout));
                 self.set_status(Status::Waiting, None).await;
                 self.broadcast(text);
             }
@@ -131,8 +131,18 @@ impl Owner {
             SessionEvent::Checkpoint(c) => {
                 // Answers the checkpoint relies on must be stored before it is.
                 self.flush().await?;
-                let file = match &c.weights {
-                    Some(bytes) => Some(self.hub.write_checkpoint(&self.id, bytes.clone()).await),
+                if let Some(bytes) = c.resume {
+                    // Before its row: the row says the session got this far.
+                    if let Err(e) = self.hub.write_checkpoint(&self.id, "resume", bytes).await {
+                        tracing::error!(session = %self.id, "writing a resume checkpoint: {e}");
+                    }
+                }
+                let file = match c.weights {
+                    Some(bytes) => Some(
+                        self.hub
+                            .write_checkpoint(&self.id, "safetensors", bytes)
+                            .await,
+                    ),
                     None => None,
                 };
                 let file = file.transpose().unwrap_or_else(|e| {

@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use tokio::sync::{broadcast, mpsc, oneshot, watch};
 
-use crate::protocol::{ProgressMessage, ProtocolError};
+use crate::protocol::{ProgressMessage, ProtocolError, QueryId};
 use crate::session::AnswerValue;
 use crate::sim::Geometry;
 use crate::store::Status;
@@ -18,13 +18,13 @@ pub(super) enum Command {
     Join(oneshot::Sender<Joined>),
     /// A trainer's answer to query `id`.
     Answer {
-        id: i64,
+        id: QueryId,
         value: AnswerValue,
         reply: oneshot::Sender<AnswerReply>,
     },
     /// A trainer takes back the answer to query `id`.
     Undo {
-        id: i64,
+        id: QueryId,
         reply: oneshot::Sender<Result<(), ProtocolError>>,
     },
     /// A researcher stops the session (queued or running).
@@ -55,6 +55,9 @@ pub struct Snapshot {
     pub reason: Option<String>,
     pub progress: ProgressMessage,
     pub geometry: Option<Geometry>,
+    /// The scene graph the running session phrases its queries in (a remote env's own task
+    /// declares it when the session starts).
+    pub graph: Option<crate::scene_graph::SceneGraph>,
 }
 
 /// A live session, as the HTTP routes and sockets hold it. Cheap to clone.
@@ -82,7 +85,7 @@ impl SessionHandle {
     }
 
     /// Answer query `id`; the reply comes after the answer is committed (or refused).
-    pub async fn answer(&self, id: i64, value: AnswerValue) -> AnswerReply {
+    pub async fn answer(&self, id: QueryId, value: AnswerValue) -> AnswerReply {
         let (reply, answer) = oneshot::channel();
         if self
             .commands
@@ -97,7 +100,7 @@ impl SessionHandle {
     }
 
     /// Take back the answer to query `id`.
-    pub async fn undo(&self, id: i64) -> Result<(), ProtocolError> {
+    pub async fn undo(&self, id: QueryId) -> Result<(), ProtocolError> {
         let (reply, answer) = oneshot::channel();
         self.commands
             .send(Command::Undo { id, reply })

@@ -8,6 +8,7 @@
 //! - `events`: applying the session thread's events (store, browsers).
 //! - `answers`: the answer path, deadlines and undo.
 //! - `thread`: starting the session thread; `sink`: the channel it reports into.
+//! - `remote`: reaching a session's remote env from its thread, and what it resumes from.
 //! - `recording`: the session's Rerun recording as its observer.
 //! - `episode_frames`: the frames kept for replay.
 
@@ -17,6 +18,7 @@ mod events;
 mod handle;
 mod owner;
 mod recording;
+mod remote;
 mod sink;
 mod thread;
 
@@ -107,8 +109,8 @@ impl Hub {
     /// (this server's, unless the launch named them), so that a resume replays it bit for bit.
     pub async fn launch(self: &Arc<Self>, mut spec: SessionSpec) -> Result<SessionRow, HubError> {
         spec.params
-            .entry("kernels".to_string())
-            .or_insert_with(|| crate::rl::kernels::default_path().name().into());
+            .kernels
+            .get_or_insert_with(crate::rl::kernels::default_path);
         spec.validate().map_err(HubError::Invalid)?;
         let id = random_hex(6);
         let token = random_hex(16);
@@ -119,7 +121,7 @@ impl Hub {
             .store
             .insert_session(NewSession {
                 id: &id,
-                task: spec.task.id(),
+                task: spec.task_name(),
                 method: &method,
                 trainer: trainer.as_str().unwrap_or("human"),
                 seed: spec.seed,
@@ -266,15 +268,29 @@ impl Hub {
             .join(format!("{episode}.json"))
     }
 
-    /// Write a learner checkpoint to `<data dir>/checkpoints/<id>.safetensors` (atomically) and
-    /// return its path relative to the data dir.
-    async fn write_checkpoint(&self, id: &str, bytes: Vec<u8>) -> std::io::Result<String> {
+    /// What a session on a remote env resumes from: `<data dir>/checkpoints/<id>.resume` (its
+    /// latest run checkpoint, or its recorded trajectories).
+    pub fn resume_path(&self, id: &str) -> PathBuf {
+        self.config
+            .data_dir
+            .join("checkpoints")
+            .join(format!("{id}.resume"))
+    }
+
+    /// Write a learner checkpoint to `<data dir>/checkpoints/<id>.<extension>` (atomically)
+    /// and return its path relative to the data dir.
+    async fn write_checkpoint(
+        &self,
+        id: &str,
+        extension: &str,
+        bytes: Vec<u8>,
+    ) -> std::io::Result<String> {
         let dir = self.config.data_dir.join("checkpoints");
-        let relative = format!("checkpoints/{id}.safetensors");
+        let relative = format!("checkpoints/{id}.{extension}");
         let path = self.config.data_dir.join(&relative);
+        let tmp = path.with_extension(format!("{extension}.tmp"));
         tokio::task::spawn_blocking(move || {
             std::fs::create_dir_all(&dir)?;
-            let tmp = path.with_extension("safetensors.tmp");
             std::fs::write(&tmp, bytes)?;
             std::fs::rename(&tmp, &path)
         })

@@ -17,7 +17,7 @@ use super::Hub;
 use super::answers::Undoable;
 use super::episode_frames::EpisodeFrames;
 use super::handle::{Command, Joined, SessionHandle, Snapshot};
-use crate::protocol::{ProgressMessage, QueryKind, ServerMessage, WithdrawReason};
+use crate::protocol::{ProgressMessage, QueryId, QueryKind, ServerMessage, WithdrawReason};
 use crate::session::{AnswerValue, Control, Ending, SessionEvent, SessionSpec};
 use crate::sim::Geometry;
 use crate::store::{Status, Store, SyntheticAnswer};
@@ -32,8 +32,10 @@ const RECENT_ANSWERS: usize = 256;
 /// A query open for answers.
 #[derive(Clone, Debug)]
 pub(super) struct Open {
-    pub id: i64,
-    pub seq: u64,
+    /// The session's query number: the query's id on the wire.
+    pub id: QueryId,
+    /// Its row in the database's `queries` table.
+    pub row: i64,
     /// The query message, serialised once for every browser.
     pub text: Arc<str>,
     pub asked: Instant,
@@ -41,11 +43,11 @@ pub(super) struct Open {
 }
 
 impl Open {
-    pub fn new(id: i64, seq: u64, text: Arc<str>, timeout: Duration) -> Self {
+    pub fn new(id: QueryId, row: i64, text: Arc<str>, timeout: Duration) -> Self {
         let asked = Instant::now();
         Self {
             id,
-            seq,
+            row,
             text,
             asked,
             deadline: asked + timeout,
@@ -66,12 +68,14 @@ pub(super) struct Owner {
     pub reason: Option<String>,
     pub progress: ProgressMessage,
     pub geometry: Option<Geometry>,
+    /// The session's scene graph, once its thread started.
+    pub graph: Option<crate::scene_graph::SceneGraph>,
     /// The query the session thread waits on.
     pub pending: Option<Open>,
     /// A query open again after an undo (the session may meanwhile wait on `pending`).
     pub reopened: Option<Open>,
     /// The latest committed answers, newest last.
-    pub recent: VecDeque<(i64, AnswerValue)>,
+    pub recent: VecDeque<(QueryId, AnswerValue)>,
     /// The latest answer a trainer gave (not a timeout's), until undone or too old.
     pub undoable: Option<Undoable>,
     /// The session thread's controls, while it runs.
@@ -104,6 +108,7 @@ impl Owner {
             reason: None,
             progress: progress.clone(),
             geometry: None,
+            graph: None,
         });
         let (commands, commands_rx): (UnboundedSender<Command>, _) =
             tokio::sync::mpsc::unbounded_channel();
@@ -125,6 +130,7 @@ impl Owner {
             reason: None,
             progress,
             geometry: None,
+            graph: None,
             pending: None,
             reopened: None,
             recent: VecDeque::new(),
@@ -224,11 +230,19 @@ impl Owner {
     }
 
     /// The one place a status changes: in the database, then in the published snapshot.
+    ///
+    /// `waiting` is `running` with a query open: it flips twice per query, so only memory holds
+    /// it (the API reads a live session's status from the snapshot) and the database keeps
+    /// `running`. Writing every flip put two writes per query on the one SQLite writer, ahead
+    /// of the answers' commits, and tripled the loadtest's p99 ack latency.
     pub async fn set_status(&mut self, status: Status, reason: Option<String>) {
-        if let Err(e) = self
-            .store
-            .set_status(&self.id, status, reason.as_deref())
-            .await
+        let live_only = |s: Status| matches!(s, Status::Running | Status::Waiting);
+        let stored_already = live_only(status) && live_only(self.status) && reason == self.reason;
+        if !stored_already
+            && let Err(e) = self
+                .store
+                .set_status(&self.id, status.stored(), reason.as_deref())
+                .await
         {
             tracing::error!(session = %self.id, "storing status {}: {e}", status.as_str());
         }
@@ -244,6 +258,7 @@ impl Owner {
             reason: self.reason.clone(),
             progress: self.progress.clone(),
             geometry: self.geometry.clone(),
+            graph: self.graph,
         });
     }
 

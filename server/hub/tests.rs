@@ -95,8 +95,9 @@ fn content() -> QueryContent {
 }
 
 impl Harness {
-    /// Ask query `seq` and return its id once the owner has stored and opened it.
-    async fn ask(&self, seq: u64) -> i64 {
+    /// Ask query `seq` and return its id on the wire once the owner has stored and opened it
+    /// (the session's query number: `seq` itself).
+    async fn ask(&self, seq: u64) -> u64 {
         self.events
             .send(SessionEvent::Query {
                 seq,
@@ -110,7 +111,8 @@ impl Harness {
         let query: serde_json::Value =
             serde_json::from_str(joined.catch_up.last().unwrap()).unwrap();
         assert_eq!(query["type"], "query");
-        query["id"].as_i64().unwrap()
+        assert_eq!(query["id"], seq);
+        seq
     }
 
     /// Wait (on the owner, not the clock) until the published status satisfies `ok`.
@@ -141,13 +143,19 @@ impl Harness {
 async fn a_query_counts_as_no_feedback_exactly_at_its_timeout() {
     let h = harness().await;
     h.events
-        .send(SessionEvent::Started { replayed: 0 })
+        .send(SessionEvent::Started {
+            replayed: 0,
+            graph: crate::scene_graph::SceneGraph::Reaching,
+        })
         .unwrap();
     let id = h.ask(0).await;
     tokio::time::advance(TIMEOUT - Duration::from_millis(1)).await;
     h.settle().await;
     assert_eq!(h.controls.try_recv(), Err(TryRecvError::Empty));
     assert_eq!(h.handle.status(), Status::Waiting);
+    // `waiting` is live state only: the database keeps `running` (no write per query).
+    let stored = h.store.session("s1").await.unwrap().unwrap().status;
+    assert_eq!(stored, Status::Running);
     tokio::time::advance(Duration::from_millis(1)).await;
     assert_eq!(
         h.control().await,
@@ -159,7 +167,7 @@ async fn a_query_counts_as_no_feedback_exactly_at_its_timeout() {
     h.wait_for(|s| s == Status::Running).await;
     let answers = h.store.answers("s1").await.unwrap();
     assert_eq!(answers.len(), 1);
-    assert_eq!(answers[0].query_id, id);
+    assert_eq!(answers[0].query_id, id as i64);
     assert_eq!(answers[0].who, crate::session::Answerer::Timeout);
     // Late: the timeout's answer stands.
     assert!(matches!(
@@ -172,7 +180,10 @@ async fn a_query_counts_as_no_feedback_exactly_at_its_timeout() {
 async fn an_answer_before_the_timeout_wins_and_no_timeout_follows() {
     let h = harness().await;
     h.events
-        .send(SessionEvent::Started { replayed: 0 })
+        .send(SessionEvent::Started {
+            replayed: 0,
+            graph: crate::scene_graph::SceneGraph::Reaching,
+        })
         .unwrap();
     let id = h.ask(0).await;
     tokio::time::advance(TIMEOUT / 2).await;
@@ -199,7 +210,10 @@ async fn an_answer_before_the_timeout_wins_and_no_timeout_follows() {
 async fn an_answer_can_be_undone_within_the_window_and_not_after() {
     let h = harness().await;
     h.events
-        .send(SessionEvent::Started { replayed: 0 })
+        .send(SessionEvent::Started {
+            replayed: 0,
+            graph: crate::scene_graph::SceneGraph::Reaching,
+        })
         .unwrap();
     // Within the window: undone, the session told, and the query open again with a new
     // deadline.
@@ -237,7 +251,10 @@ async fn an_answer_can_be_undone_within_the_window_and_not_after() {
 async fn the_end_is_stored_and_published_and_open_queries_close() {
     let h = harness().await;
     h.events
-        .send(SessionEvent::Started { replayed: 0 })
+        .send(SessionEvent::Started {
+            replayed: 0,
+            graph: crate::scene_graph::SceneGraph::Reaching,
+        })
         .unwrap();
     let id = h.ask(0).await;
     h.events

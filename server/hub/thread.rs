@@ -7,6 +7,7 @@ use std::sync::Arc;
 use tokio::sync::mpsc::UnboundedReceiver;
 
 use super::owner::Owner;
+use super::remote::{RemotePlan, keep_earlier_recording};
 use super::{recording, sink};
 use crate::record::RecordingOptions;
 use crate::session::{Controls, Ending, SessionContext, SessionEvent, run_session};
@@ -26,11 +27,25 @@ impl Owner {
                 return Err(format!("reading the session's answers: {e}"));
             }
         };
-        // A checkpoint is checked only if the replay reaches it with stored answers alone.
+        // A checkpoint is checked only if the replay reaches it with stored answers alone (a
+        // session on a remote env resumes from its checkpoint instead).
         let verify = checkpoint
-            .filter(|c| c.answers as usize <= stored_answers.len())
+            .filter(|c| c.answers as usize <= stored_answers.len() && self.spec.env.is_none())
             .map(|c| (c.progress as u64, c.digest));
         let settings = self.spec.settings()?;
+        let remote = match &self.spec.env {
+            None => None,
+            Some(target) => Some(RemotePlan {
+                target: target.clone(),
+                timeout_s: settings.env_timeout_s,
+                resume_path: self.hub.resume_path(&id),
+                stored_queries: self
+                    .store
+                    .query_count(&id)
+                    .await
+                    .map_err(|e| format!("reading the session's queries: {e}"))?,
+            }),
+        };
         let options = RecordingOptions {
             path: settings.record.then(|| self.hub.recording_path(&id)),
             connect: settings
@@ -48,6 +63,7 @@ impl Owner {
             verify,
             models_dir: self.hub.config.models_dir.clone(),
             observer: None,
+            remote: None,
         };
         let spec = self.spec.clone();
         let mut builder = std::thread::Builder::new().name(format!("session-{id}"));
@@ -60,6 +76,26 @@ impl Owner {
         builder
             .spawn(move || {
                 let mut ctx = ctx;
+                // Reaching a remote env is blocking IO too: here, with a deadline.
+                let mut graph = graph;
+                if let Some(plan) = remote {
+                    match plan.connect(&spec) {
+                        Ok(r) => {
+                            if spec.task.is_none() {
+                                graph = r.description.graph;
+                            }
+                            let from_checkpoint =
+                                r.resume_from.is_some() && !spec.method.is_preference();
+                            if let (true, Some(path)) = (from_checkpoint, &options.path)
+                                && let Err(e) = keep_earlier_recording(path)
+                            {
+                                return failed(format!("keeping the recording so far: {e}"));
+                            }
+                            ctx.remote = Some(r);
+                        }
+                        Err(reason) => return failed(reason),
+                    }
+                }
                 // Opening the file (and a viewer connection) is blocking IO: here, not on the
                 // async runtime.
                 match recording::start(&id, graph, &options) {

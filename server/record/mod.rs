@@ -29,6 +29,7 @@
 //! | `world/no_entry` | `Boxes3D` (wireframe) | static, Placing |
 //! | `world/gripper` | `Boxes3D` posed (colour: open orange, closed grey) | per step |
 //! | `world/ball` | `Points3D` with the ball's radius (colour: held or free) | per step, Placing |
+//! | `world/frame` | `EncodedImage` (PNG or JPEG, as the env sent it) | per step it sent one: sessions on a remote env that people watch |
 //! | `world/terrain` | `LineStrips2D` | each episode, Lunar Lander |
 //! | `world/flags` | `LineStrips2D`: poles and pennants | each episode, Lunar Lander |
 //! | `world/lander/hull` | `LineStrips2D`: closed polygon in world coordinates | per step |

@@ -6,8 +6,8 @@
 
 use anyhow::Context;
 use rerun::{
-    Arrows2D, Boxes3D, Color, FillMode, LineStrips2D, LineStrips3D, Points3D, RecordingStream,
-    Scalars, ViewCoordinates,
+    Arrows2D, Boxes3D, Color, EncodedImage, FillMode, LineStrips2D, LineStrips3D, Points3D,
+    RecordingStream, Scalars, ViewCoordinates,
 };
 
 use crate::sim::{Cuboid, Geometry, Pose2, Pose3, RenderState};
@@ -87,6 +87,8 @@ impl Scene {
                 .with_context(|| format!("logging {path}"))
         };
         match geometry {
+            // Nothing fixed to draw: its frames carry the whole scene.
+            Geometry::Remote { .. } => {}
             Geometry::Reaching {
                 table,
                 goal,
@@ -168,6 +170,17 @@ impl Scene {
         state: &RenderState,
     ) -> anyhow::Result<()> {
         match state {
+            RenderState::Remote { frame, .. } => {
+                // The env's own rendering, as encoded (PNG or JPEG): only on the steps it was
+                // asked for one (people watching).
+                if let Some(frame) = frame {
+                    rec.log(
+                        "world/frame",
+                        &EncodedImage::new(frame.data.to_vec())
+                            .with_media_type(frame.media_type.mime()),
+                    )?;
+                }
+            }
             RenderState::Reaching { gripper } => {
                 rec.log("world/gripper", &gripper_box(gripper, GRIPPER_OPEN))?;
             }

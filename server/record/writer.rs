@@ -53,7 +53,8 @@ impl EpisodeIndex {
 impl Writer {
     /// Take over `rec` and log what never changes: axes, and the series' display names.
     pub(super) fn new(rec: RecordingStream, graph: SceneGraph) -> anyhow::Result<Self> {
-        if !matches!(graph, SceneGraph::LunarLander { .. }) {
+        // The table-top tasks are 3D; Lunar Lander and a remote env's frames are 2D.
+        if matches!(graph, SceneGraph::Reaching | SceneGraph::Placing) {
             scene::log_view_coordinates(&rec)?;
         }
         for predicate in graph.predicates() {

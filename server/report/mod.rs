@@ -2,8 +2,10 @@
 //! tables and figures made from whatever runs have finished.
 //!
 //! - [`grid`] (pure): which runs a figure needs and the command line of each.
-//! - [`runner`]: runs them as `dualrep train` / `dualrep prefs` child processes, J at a time,
-//!   skipping finished ones.
+//! - [`runner`]: runs them through an executor, skipping finished ones; [`run_end`]: how a run
+//!   ended, judged alike by every executor.
+//! - The executors: [`local`] (`dualrep train` / `dualrep prefs` child processes, J at a time)
+//!   and [`slurm`] (the same command lines as tasks of `sbatch` job arrays on a cluster).
 //! - [`run_files`]: reads a run directory's `metrics.csv` / `alignment.csv` and `summary.json`.
 //! - [`stats`], [`aggregate`] (pure): mean and standard error over seeds, on a common step grid
 //!   for Figure 3 and per query for Figure 5.
@@ -15,10 +17,13 @@
 pub mod aggregate;
 pub mod font;
 pub mod grid;
+pub mod local;
 pub mod methods;
 pub mod plot;
+pub mod run_end;
 pub mod run_files;
 pub mod runner;
+pub mod slurm;
 pub mod stats;
 pub mod table;
 

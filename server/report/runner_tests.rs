@@ -1,39 +1,25 @@
-//! The runner with `/bin/sh` as the child: each run is a tiny script that gets its run
-//! directory as `$1` and plays a finished, slow or failing `dualrep train`.
+//! The runner's own rules (skip what finished, follow-ups after their trigger) with the local
+//! pool as its executor and `/bin/sh` as the child: each run is a tiny script that gets its run
+//! directory as `$1` and plays a finished or slow `dualrep train`.
 
+use std::fs;
 use std::path::Path;
 
 use super::*;
-use crate::sim::Task;
+use crate::report::local::LocalPool;
+use crate::report::local::tests::{FINISH, SH, sh_run, statuses};
 
-const SH: &str = "/bin/sh";
-
-/// A run whose child is `sh -c script sh <dir>`.
-fn sh_run(root: &Path, seed: u64, script: &str) -> RunSpec {
-    let dir = root.join(format!("seed{seed}"));
-    RunSpec {
-        task: Task::Reaching,
-        method: "sac".into(),
-        seed,
-        args: vec![
-            "-c".into(),
-            script.into(),
-            "sh".into(),
-            dir.to_string_lossy().into_owned(),
-        ],
-        dir,
-    }
-}
-
-const FINISH: &str = r#"echo '{}' > "$1/summary.json""#;
-
-fn statuses(outcomes: &[Outcome]) -> Vec<(u64, RunStatus)> {
-    let mut s: Vec<_> = outcomes
-        .iter()
-        .map(|o| (o.spec.seed, o.status.clone()))
-        .collect();
-    s.sort_by_key(|(seed, _)| *seed);
-    s
+/// `run_grid` on a local pool of `jobs`, waiting until done.
+fn run_local(
+    runs: Vec<RunSpec>,
+    jobs: usize,
+    follow_up: impl FnMut(&Outcome) -> Vec<RunSpec>,
+    on_event: impl FnMut(Event<'_>),
+) -> Vec<Outcome> {
+    let mut pool = LocalPool::new(Path::new(SH), jobs);
+    let run = run_grid(&mut pool, runs, Waiting::UntilDone, follow_up, on_event).unwrap();
+    assert_eq!(run.in_flight, 0);
+    run.outcomes
 }
 
 #[test]
@@ -47,7 +33,7 @@ fn report_runner_skips_finished_runs_so_a_grid_resumes() {
     fs::create_dir_all(&runs[0].dir).unwrap();
     fs::write(runs[0].dir.join("summary.json"), "{\"earlier\": true}").unwrap();
 
-    let outcomes = run_grid(Path::new(SH), runs.clone(), 2, |_| vec![], |_| {});
+    let outcomes = run_local(runs.clone(), 2, |_| vec![], |_| {});
     assert_eq!(
         statuses(&outcomes),
         [(0, RunStatus::Skipped), (1, RunStatus::Succeeded)]
@@ -62,8 +48,7 @@ fn report_runner_skips_finished_runs_so_a_grid_resumes() {
     );
     // A second invocation finds everything done and starts nothing.
     let mut started = 0;
-    let again = run_grid(
-        Path::new(SH),
+    let again = run_local(
         runs,
         2,
         |_| vec![],
@@ -76,98 +61,12 @@ fn report_runner_skips_finished_runs_so_a_grid_resumes() {
 }
 
 #[test]
-fn report_runner_runs_exactly_jobs_children_at_once() {
-    let tmp = tempfile::tempdir().unwrap();
-    let log = tmp.path().join("log");
-    // Each child logs its start, then waits (at most ~10 s) until two children have started:
-    // with jobs = 2 the first two can only get past this together, which proves they overlap.
-    let script = format!(
-        r#"echo start >> "{log}"
-        i=0
-        while [ "$(grep -c start "{log}")" -lt 2 ] && [ $i -lt 1000 ]; do sleep 0.01; i=$((i+1)); done
-        sleep 0.05
-        echo end >> "{log}"
-        {FINISH}"#,
-        log = log.display()
-    );
-    let runs: Vec<_> = (0..6).map(|s| sh_run(tmp.path(), s, &script)).collect();
-    let outcomes = run_grid(Path::new(SH), runs, 2, |_| vec![], |_| {});
-    assert!(outcomes.iter().all(|o| o.status == RunStatus::Succeeded));
-
-    let (mut now, mut most) = (0i32, 0i32);
-    for line in fs::read_to_string(&log).unwrap().lines() {
-        now += if line == "start" { 1 } else { -1 };
-        most = most.max(now);
-    }
-    assert_eq!(most, 2, "two children at once, never more");
-}
-
-#[test]
-fn report_runner_reports_a_failing_child_and_goes_on() {
-    let tmp = tempfile::tempdir().unwrap();
-    let runs = vec![
-        sh_run(tmp.path(), 0, FINISH),
-        sh_run(
-            tmp.path(),
-            1,
-            "echo working; echo 'error: boom' >&2; exit 3",
-        ),
-        sh_run(tmp.path(), 2, FINISH),
-        sh_run(tmp.path(), 3, "echo 'forgot the summary'"),
-    ];
-    let outcomes = run_grid(Path::new(SH), runs.clone(), 1, |_| vec![], |_| {});
-    assert_eq!(
-        statuses(&outcomes),
-        [
-            (0, RunStatus::Succeeded),
-            (1, RunStatus::Failed("exit code 3: error: boom".into())),
-            (2, RunStatus::Succeeded),
-            (
-                3,
-                RunStatus::Failed(format!(
-                    "exited 0 but wrote no {}",
-                    runs[3].dir.join("summary.json").display()
-                ))
-            ),
-        ]
-    );
-    // Its output is kept in its run directory for a post-mortem.
-    let dir = &runs[1].dir;
-    assert_eq!(
-        fs::read_to_string(dir.join("stderr.log")).unwrap(),
-        "error: boom\n"
-    );
-    assert_eq!(
-        fs::read_to_string(dir.join("stdout.log")).unwrap(),
-        "working\n"
-    );
-}
-
-#[test]
-fn report_runner_reports_a_program_that_cannot_start() {
-    let tmp = tempfile::tempdir().unwrap();
-    let run = sh_run(tmp.path(), 0, FINISH);
-    let missing = tmp.path().join("no-such-program");
-    let outcomes = run_grid(&missing, vec![run.clone()], 1, |_| vec![], |_| {});
-    let RunStatus::Failed(why) = &outcomes[0].status else {
-        panic!("{outcomes:?}");
-    };
-    assert!(why.starts_with("could not run"), "{why}");
-    assert!(
-        fs::read_to_string(run.dir.join("stderr.log"))
-            .unwrap()
-            .contains(why)
-    );
-}
-
-#[test]
 fn report_runner_queues_follow_up_runs_after_their_trigger() {
     let tmp = tempfile::tempdir().unwrap();
     let first = sh_run(tmp.path(), 0, FINISH);
     let later = sh_run(tmp.path(), 9, FINISH);
     let mut events = Vec::new();
-    let outcomes = run_grid(
-        Path::new(SH),
+    let outcomes = run_local(
         vec![first],
         4,
         |o| {
@@ -180,8 +79,10 @@ fn report_runner_queues_follow_up_runs_after_their_trigger() {
         |e| {
             events.push(match e {
                 Event::Added(n) => format!("added {n}"),
+                Event::Queued { spec, job } => format!("queued {} {job:?}", spec.seed),
                 Event::Started(s) => format!("started {}", s.seed),
                 Event::Finished(o) => format!("finished {}", o.spec.seed),
+                Event::Note(text) => format!("note {text}"),
             })
         },
     );
@@ -189,9 +90,11 @@ fn report_runner_queues_follow_up_runs_after_their_trigger() {
     assert_eq!(
         events,
         [
+            "queued 0 None",
             "started 0",
             "finished 0",
             "added 1",
+            "queued 9 None",
             "started 9",
             "finished 9"
         ]

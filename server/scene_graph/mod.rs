@@ -3,8 +3,10 @@
 //!
 //! - `abstract_state`: the bit vector, Hamming distance, display.
 //! - `reaching`, `placing`, `lunar_lander`: each task's predicates and evaluator.
+//! - `declared`: the predicates an environment in another process declares and evaluates itself.
 
 mod abstract_state;
+pub mod declared;
 pub mod lunar_lander;
 pub mod placing;
 pub mod reaching;
@@ -12,7 +14,7 @@ pub mod reaching;
 pub use abstract_state::AbstractState;
 use serde::{Deserialize, Serialize};
 
-use crate::sim::Task;
+use crate::sim::{Env, Task};
 
 /// One symbolic fact about the scene: a stable machine name and a label a trainer reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -25,7 +27,7 @@ pub struct Predicate {
 
 /// A task's scene graph: which predicates it has and how to evaluate them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(tag = "task", rename_all = "kebab-case")]
+#[serde(try_from = "declared::GraphRepr", into = "declared::GraphRepr")]
 pub enum SceneGraph {
     Reaching,
     Placing,
@@ -35,6 +37,9 @@ pub enum SceneGraph {
         #[serde(default)]
         side_engines_on_a0: bool,
     },
+    /// Predicates an environment in another process declared (names interned, see
+    /// `sim::interned`) and reports step by step: the env is the graph's evaluator.
+    Declared(&'static [Predicate]),
 }
 
 impl SceneGraph {
@@ -54,6 +59,7 @@ impl SceneGraph {
             SceneGraph::Reaching => &reaching::PREDICATES,
             SceneGraph::Placing => &placing::PREDICATES,
             SceneGraph::LunarLander { .. } => &lunar_lander::PREDICATES,
+            SceneGraph::Declared(predicates) => predicates,
         }
     }
 
@@ -63,6 +69,8 @@ impl SceneGraph {
     }
 
     /// Evaluate the graph on the next observation `s_{t+1}` and the action `a_t` that led to it.
+    /// A declared graph has no evaluator here (its env reports the bits): use
+    /// [`SceneGraph::after_step`] where the env is at hand.
     pub fn evaluate(&self, next_obs: &[f32], action: &[f32]) -> AbstractState {
         match *self {
             SceneGraph::Reaching => reaching::evaluate(next_obs),
@@ -70,6 +78,17 @@ impl SceneGraph {
             SceneGraph::LunarLander { side_engines_on_a0 } => {
                 lunar_lander::evaluate(next_obs, action, side_engines_on_a0)
             }
+            SceneGraph::Declared(_) => AbstractState::default(),
+        }
+    }
+
+    /// The abstract state after `env`'s last step: what the env reported for a declared graph,
+    /// else the graph evaluated on `(next_obs, action)` (a built-in task's graph on a remote
+    /// copy of that task is evaluated here too).
+    pub fn after_step(&self, env: &dyn Env, next_obs: &[f32], action: &[f32]) -> AbstractState {
+        match self {
+            SceneGraph::Declared(_) => AbstractState(env.reported_predicates().unwrap_or(0)),
+            _ => self.evaluate(next_obs, action),
         }
     }
 

@@ -6,6 +6,7 @@ use std::collections::VecDeque;
 use std::path::Path;
 use std::sync::Arc;
 
+use crate::guidance::drpl::pool::Clip;
 use crate::guidance::drpl::trainer::{
     Preference, PreferenceQuery, PreferenceTrainer, SyntheticOracle,
 };
@@ -13,19 +14,24 @@ use crate::guidance::drpl::trajectories::Trajectory;
 use crate::guidance::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
 use crate::rl::Sac;
 use crate::scene_graph::SceneGraph;
-use crate::sim::{EnvOptions, Task};
+use crate::sim::{Env, EnvOptions, Task};
 
 use super::events::{
     AnswerValue, Controls, Observer, QueryKind, Revision, SessionEvent, SessionSink, StoredRevision,
 };
 use super::query::{self, FrameHistory, QueryContent};
+use super::remote::Reconnect;
 use super::runner::SessionContext;
 
 /// Load an expert written by `dualrep expert` (the synthetic evaluative trainer consults it).
-pub fn load_expert(path: &Path, task: Task) -> Result<Sac, String> {
+pub fn load_expert(path: &Path, task: &str) -> Result<Sac, String> {
     let bytes = std::fs::read(path).map_err(|e| {
+        let how = match task.parse::<Task>() {
+            Ok(t) => format!("`dualrep expert --task {t}`"),
+            Err(_) => format!("`dualrep expert --env-url URL` on {task}"),
+        };
         format!(
-            "the synthetic trainer needs an expert at {} ({e}); train one with `dualrep expert --task {task}`",
+            "the synthetic trainer needs an expert at {} ({e}); train one with {how}",
             path.display()
         )
     })?;
@@ -36,7 +42,7 @@ pub fn load_expert(path: &Path, task: Task) -> Result<Sac, String> {
 /// binary ships.
 pub fn load_task_expert(dir: Option<&Path>, task: Task) -> Result<Sac, String> {
     match dir {
-        Some(dir) => load_expert(&dir.join(format!("{task}.safetensors")), task),
+        Some(dir) => load_expert(&dir.join(format!("{task}.safetensors")), task.id()),
         None => {
             let bytes = crate::shipped::expert(task)
                 .ok_or_else(|| format!("this binary ships no expert for {task}"))?;
@@ -56,14 +62,25 @@ pub(super) struct Asker {
     pub(super) seq: u64,
     /// A halt came while a query was open: the last answer was not given by anyone.
     pub(super) aborted: bool,
+    /// The env failed while a query was being prepared (a remote env replaying a clip): the
+    /// query was not asked, and the session ends with this reason.
+    pub(super) fault: Option<String>,
+    /// A person answered since the last call of [`Asker::take_answered`].
+    answered_live: bool,
     pub(super) observer: Option<Box<dyn Observer>>,
 }
 
 impl Asker {
-    /// The session's asker, once its run is built: tells the server the session started.
-    pub(super) fn start(ctx: SessionContext, observer: Option<Box<dyn Observer>>) -> Self {
+    /// The session's asker, once its run is built: tells the server the session started (and
+    /// which scene graph its queries are phrased in).
+    pub(super) fn start(
+        ctx: SessionContext,
+        observer: Option<Box<dyn Observer>>,
+        graph: SceneGraph,
+    ) -> Self {
         ctx.sink.send(SessionEvent::Started {
             replayed: ctx.stored_answers.len() as u64,
+            graph,
         });
         Self {
             sink: ctx.sink,
@@ -72,8 +89,32 @@ impl Asker {
             replay_revisions: ctx.stored_revisions.into(),
             seq: 0,
             aborted: false,
+            fault: None,
+            answered_live: false,
             observer,
         }
+    }
+
+    /// Ask new queries from session query number `next` on, replaying nothing (a remote
+    /// session resumed from a checkpoint after `steps` steps: its stored answers are in the run
+    /// or lost with it), and apply the stored revisions the checkpoint does not hold (applied
+    /// at `steps` or later, or never) at once.
+    pub(super) fn continue_at(&mut self, next: u64, steps: u64) {
+        self.seq = next;
+        self.replay.clear();
+        self.replay_revisions = std::mem::take(&mut self.replay_revisions)
+            .into_iter()
+            .filter(|r| r.applied_at.is_none_or(|at| at >= steps))
+            .map(|r| StoredRevision {
+                applied_at: None,
+                ..r
+            })
+            .collect();
+    }
+
+    /// Whether a person answered since the last call.
+    pub(super) fn take_answered(&mut self) -> bool {
+        std::mem::take(&mut self.answered_live)
     }
 
     fn observe(&mut self, f: impl FnOnce(&mut dyn Observer)) {
@@ -123,26 +164,40 @@ impl Asker {
         abstract_state: u32,
         kind: QueryKind,
         describe: String,
-        content: impl FnOnce() -> QueryContent,
+        content: impl FnOnce() -> Result<QueryContent, String>,
     ) -> Option<AnswerValue> {
-        let seq = self.seq;
-        self.seq += 1;
-        self.observe(|o| o.query(step, seq, kind, describe));
         if let Some(v) = self.replay.pop_front() {
+            let seq = self.seq;
+            self.seq += 1;
+            self.observe(|o| o.query(step, seq, kind, describe));
             return Some(self.answered(step, seq, v));
         }
         if self.controls.halted().is_some() {
             self.aborted = true;
             return None;
         }
+        let content = match content() {
+            Ok(c) => c,
+            Err(reason) => {
+                self.fault = Some(reason);
+                self.aborted = true;
+                return None;
+            }
+        };
+        let seq = self.seq;
+        self.seq += 1;
+        self.observe(|o| o.query(step, seq, kind, describe));
         self.sink.send(SessionEvent::Query {
             seq,
             step,
             abstract_state,
-            content: Box::new(content()),
+            content: Box::new(content),
         });
         match self.controls.wait_answer(seq) {
-            Ok(v) => Some(self.answered(step, seq, v)),
+            Ok(v) => {
+                self.answered_live = true;
+                Some(self.answered(step, seq, v))
+            }
             Err(_) => {
                 self.aborted = true;
                 None
@@ -194,6 +249,21 @@ pub(super) struct EvaluativeAsker {
 }
 
 impl EvaluativeTrainer for EvaluativeAsker {
+    /// The synthetic oracle's state (its random stream), for a remote session's run checkpoint.
+    fn checkpoint_state(&self) -> serde_json::Value {
+        match &self.judge {
+            Judge::Synthetic { oracle, .. } => oracle.checkpoint_state(),
+            Judge::Human { .. } => serde_json::Value::Null,
+        }
+    }
+
+    fn restore_state(&mut self, state: &serde_json::Value) -> Result<(), String> {
+        match &mut self.judge {
+            Judge::Synthetic { oracle, .. } => oracle.restore_state(state),
+            Judge::Human { .. } => Ok(()),
+        }
+    }
+
     fn evaluate(&mut self, q: &EvaluativeQuery<'_>) -> Evaluation {
         match &mut self.judge {
             Judge::Human { history, graph } => self
@@ -203,11 +273,13 @@ impl EvaluativeTrainer for EvaluativeAsker {
                     q.abstract_state.0,
                     QueryKind::Evaluative,
                     describe_evaluative(graph, q),
-                    || QueryContent::Evaluative {
-                        clip: history.clip().expect("the history starts with the episode"),
-                        action: q.action.to_vec(),
-                        holding: graph.holding(q.abstract_state),
-                        predicted: q.predicted,
+                    || {
+                        Ok(QueryContent::Evaluative {
+                            clip: history.clip().expect("the history starts with the episode"),
+                            action: q.action.to_vec(),
+                            holding: graph.holding(q.abstract_state),
+                            predicted: q.predicted,
+                        })
                     },
                 )
                 .and_then(AnswerValue::as_evaluation)
@@ -233,12 +305,46 @@ impl EvaluativeTrainer for EvaluativeAsker {
     }
 }
 
+/// Where a human preference session replays its clips: a new env of our task, or a
+/// connection of its own to the remote env the trajectories were recorded on.
+pub(super) enum ClipEnv {
+    Builtin {
+        task: Task,
+        /// The task's version, to replay the clips in the env they were recorded in.
+        options: EnvOptions,
+    },
+    Remote {
+        reconnect: Reconnect,
+        /// Opened at the first query.
+        env: Option<Box<dyn Env>>,
+    },
+}
+
+impl ClipEnv {
+    fn render(&mut self, trajectory: &Trajectory, clip: &Clip) -> Result<query::Clip, String> {
+        match self {
+            ClipEnv::Builtin { task, options } => {
+                Ok(query::render_clip(*task, options, trajectory, clip))
+            }
+            ClipEnv::Remote { reconnect, env } => {
+                if env.is_none() {
+                    *env = Some(reconnect().map_err(|e| e.to_string())?);
+                }
+                let on = env.as_deref_mut().expect("connected above");
+                query::render_clip_on(on, trajectory, clip).map_err(|e| {
+                    // A broken connection is not used again.
+                    *env = None;
+                    format!("replaying a clip: {e}")
+                })
+            }
+        }
+    }
+}
+
 /// Who compares a preference session's pairs.
 pub(super) enum Comparer {
     Human {
-        task: Task,
-        /// The task's version, to replay the clips in the env they were recorded in.
-        env: EnvOptions,
+        clips: ClipEnv,
         graph: SceneGraph,
         trajectories: Vec<Trajectory>,
     },
@@ -258,8 +364,7 @@ impl PreferenceTrainer for PreferenceAsker {
         let state = q.left.abstract_state.map_or(0, |s| s.0);
         match &mut self.comparer {
             Comparer::Human {
-                task,
-                env,
+                clips,
                 graph,
                 trajectories,
             } => self
@@ -269,22 +374,14 @@ impl PreferenceTrainer for PreferenceAsker {
                     state,
                     QueryKind::Preference,
                     describe_preference(graph, q),
-                    || QueryContent::Preference {
-                        left: query::render_clip(
-                            *task,
-                            env,
-                            &trajectories[q.left.trajectory],
-                            q.left,
-                        ),
-                        right: query::render_clip(
-                            *task,
-                            env,
-                            &trajectories[q.right.trajectory],
-                            q.right,
-                        ),
-                        left_holding: query::holding(graph, q.left.abstract_state),
-                        right_holding: query::holding(graph, q.right.abstract_state),
-                        predicate: q.predicate.map(|i| graph.predicates()[i]),
+                    || {
+                        Ok(QueryContent::Preference {
+                            left: clips.render(&trajectories[q.left.trajectory], q.left)?,
+                            right: clips.render(&trajectories[q.right.trajectory], q.right)?,
+                            left_holding: query::holding(graph, q.left.abstract_state),
+                            right_holding: query::holding(graph, q.right.abstract_state),
+                            predicate: q.predicate.map(|i| graph.predicates()[i]),
+                        })
                     },
                 )
                 .and_then(AnswerValue::as_preference)

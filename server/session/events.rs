@@ -10,14 +10,14 @@ use serde::{Deserialize, Serialize};
 use crate::guidance::drpl::trainer::Preference;
 use crate::guidance::evaluative_run::EpisodeRecord;
 use crate::guidance::evaluative_trainer::Evaluation;
-use crate::scene_graph::AbstractState;
+use crate::scene_graph::{AbstractState, SceneGraph};
 use crate::sim::{Geometry, RenderState};
 
 use super::query::QueryContent;
 
 /// Which answers a query takes: a +1 / 0 / -1 judgement (DREF, EF) or a preference between two
 /// segments (DRPL and the other preference methods).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum QueryKind {
     Evaluative,
@@ -40,7 +40,7 @@ impl QueryKind {
 }
 
 /// Who gave an answer.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Answerer {
     /// A person, through the websocket.
@@ -69,7 +69,7 @@ impl Answerer {
 
 /// A trainer's answer as the websocket carries it: `1 | 0 | -1` or `"left" | "right" | "equal" |
 /// "skip"`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(untagged)]
 pub enum AnswerValue {
     Evaluation(i8),
@@ -158,6 +158,10 @@ pub struct Checkpoint {
     pub digest: String,
     /// The learner's safetensors bytes (evaluative sessions).
     pub weights: Option<Vec<u8>>,
+    /// What a session on a remote env resumes from (which cannot replay from step 0): its
+    /// whole run (evaluative) or the trajectories it recorded (preference). Kept, latest only,
+    /// beside the session's other checkpoints.
+    pub resume: Option<Vec<u8>>,
 }
 
 /// Everything a session reports, in order.
@@ -167,6 +171,9 @@ pub enum SessionEvent {
     /// answers it will not ask again).
     Started {
         replayed: u64,
+        /// The scene graph its queries are phrased in (a remote env's own task: the one it
+        /// declared).
+        graph: SceneGraph,
     },
     Frame(Box<Frame>),
     /// A query for people: the session now waits for `Control::Answer` with this `seq`.

@@ -6,11 +6,17 @@
 //! - `query`: what a person is shown (clips, predicates).
 //! - `asker`: who answers: stored answers, people through the control channel, or a synthetic
 //!   trainer; the observer sees every query and answer.
-//! - `runner`: the loop: pacing, frames, asking, replaying stored answers, checkpoints.
+//! - `runner`: builds the run from its spec; `evaluative_loop` and `preference_loop` drive it:
+//!   pacing, frames, asking, replaying stored answers, checkpoints.
+//! - `remote`: a session on an env in another process, which resumes from its latest
+//!   checkpoint instead of replaying from step 0.
 
 mod asker;
+mod evaluative_loop;
 pub mod events;
+mod preference_loop;
 pub mod query;
+pub mod remote;
 pub mod runner;
 pub mod spec;
 
@@ -20,5 +26,6 @@ pub use events::{
     Revision, SessionEvent, SessionSink, StoredRevision,
 };
 pub use query::{Clip, QueryContent};
+pub use remote::{QueryNumbering, Reconnect, RemoteSession};
 pub use runner::{SessionContext, digest, run_session};
 pub use spec::{SessionMethod, SessionSettings, SessionSpec, TrainerKind};

@@ -9,7 +9,7 @@ use serde::Serialize;
 use crate::guidance::drpl::pool;
 use crate::guidance::drpl::trajectories::Trajectory;
 use crate::scene_graph::{AbstractState, Predicate, SceneGraph};
-use crate::sim::{EnvOptions, Geometry, RenderState, Task};
+use crate::sim::{Env, EnvFault, EnvOptions, Geometry, RenderState, Task};
 
 /// A short stretch of an episode for a browser to loop.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -91,19 +91,31 @@ pub fn render_clip(
     clip: &pool::Clip,
 ) -> Clip {
     let mut env = task.make_env_with(options);
-    env.reset(trajectory.reset_seed);
+    render_clip_on(env.as_mut(), trajectory, clip).expect("the built-in tasks never fail")
+}
+
+/// [`render_clip`] on a given env (one in another process that repeats an episode from its
+/// seed), asking it for frames only on the clip's steps.
+pub fn render_clip_on(
+    env: &mut dyn Env,
+    trajectory: &Trajectory,
+    clip: &pool::Clip,
+) -> Result<Clip, EnvFault> {
+    env.set_frames(clip.start == 0);
+    env.try_reset(trajectory.reset_seed)?;
     let geometry = env.geometry();
     let mut frames = Vec::with_capacity(clip.len() + 1);
     if clip.start == 0 {
         frames.push(env.render());
     }
     for (i, step) in trajectory.steps[..clip.end].iter().enumerate() {
-        env.step(&step.action);
+        env.set_frames(i + 1 >= clip.start);
+        env.try_step(&step.action)?;
         if i + 1 >= clip.start {
             frames.push(env.render());
         }
     }
-    Clip { geometry, frames }
+    Ok(Clip { geometry, frames })
 }
 
 /// The predicate labels that hold in the clip's abstract state (empty for windows that span

@@ -1,33 +1,20 @@
 //! The session loop: builds the run from its spec and drives it on the calling thread (the
 //! server gives each session its own), pacing human sessions to a watchable rate, streaming
 //! frames, asking people through the control channel, replaying stored answers after a resume,
-//! and checkpointing.
+//! and checkpointing. The loops themselves are in `evaluative_loop` and `preference_loop`.
 
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::{Duration, Instant};
 
-use crate::guidance::drpl::pool::QueryPool;
-use crate::guidance::drpl::run::PreferenceRun;
-use crate::guidance::drpl::trainer::Preference;
-use crate::guidance::drpl::trainer::SyntheticOracle;
-use crate::guidance::drpl::trajectories::Trajectory;
-use crate::guidance::evaluative_run::EvaluativeRun;
-use crate::guidance::evaluative_trainer::{Evaluation, NoTrainer};
-use crate::guidance::expert_oracle::{ExpertOracle, OracleRule};
-use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::rl::kernels::{self, KernelPath};
 
-use super::asker::{Asker, Comparer, EvaluativeAsker, Judge, PreferenceAsker, load_task_expert};
 use super::events::{
-    AnswerValue, Checkpoint, Controls, Ending, Frame, Halt, Observer, Revision, SessionEvent,
-    SessionSink, StoredRevision,
+    AnswerValue, Controls, Ending, Halt, Observer, Revision, SessionEvent, SessionSink,
+    StoredRevision,
 };
-use super::query::FrameHistory;
-use super::spec::{RunConfig, SessionSettings, SessionSpec, TrainerKind};
-
-/// How often a running session reports its progress.
-const PROGRESS_EVERY: Duration = Duration::from_millis(250);
+use super::remote::RemoteSession;
+use super::spec::{RunConfig, SessionSpec};
+use super::{evaluative_loop, preference_loop};
 
 /// Everything a session thread gets besides its spec.
 pub struct SessionContext {
@@ -43,6 +30,8 @@ pub struct SessionContext {
     pub models_dir: Option<PathBuf>,
     /// Sees every step, query and answer (the recording), if any.
     pub observer: Option<Box<dyn Observer>>,
+    /// The env, connected, when the session's is in another process (`spec.env`).
+    pub remote: Option<RemoteSession>,
 }
 
 /// Run the session to its end and report how it ended (also sent as `SessionEvent::Ended`).
@@ -80,19 +69,16 @@ fn session_kernels(spec: &SessionSpec) -> Result<KernelPath, String> {
 /// dropped, and so flushed, before the session reports its end.
 fn run(spec: &SessionSpec, mut ctx: SessionContext) -> Result<Ending, String> {
     let observer = ctx.observer.take();
+    let remote = ctx.remote.take();
+    if spec.env.is_some() != remote.is_some() {
+        return Err("a session on a remote env needs its env connected (and only such one)".into());
+    }
     let settings = spec.settings()?;
-    match spec.run_config()? {
+    match spec.run_config_on(remote.as_ref().map(|r| &r.description))? {
         RunConfig::Evaluative(config) => {
-            let run = EvaluativeRun::new(config, spec.budget);
-            run_evaluative(spec, settings, run, ctx, observer)
+            evaluative_loop::run(spec, settings, config, remote, ctx, observer)
         }
-        RunConfig::Preference(config) => {
-            // As `PreferenceRun::new`, but keeping the trajectories to render clips from.
-            let trajs = PreferenceRun::record_trajectories(&config);
-            let pool = QueryPool::from_trajectories(config.task, &trajs, config.min_run);
-            let run = PreferenceRun::with_pool(config, pool);
-            run_preference(spec, run, trajs, ctx, observer)
-        }
+        RunConfig::Preference(config) => preference_loop::run(spec, config, remote, ctx, observer),
     }
 }
 
@@ -105,7 +91,7 @@ pub fn digest(bytes: &[u8]) -> String {
 }
 
 /// Ends the loop early when the replay does not reproduce the checkpoint it resumes from.
-fn check_replay(
+pub(super) fn check_replay(
     verify: &Option<(u64, String)>,
     progress: u64,
     digest_now: impl FnOnce() -> String,
@@ -125,7 +111,7 @@ fn check_replay(
     }
 }
 
-fn revised(r: Revision, progress: u64) -> SessionEvent {
+pub(super) fn revised(r: Revision, progress: u64) -> SessionEvent {
     SessionEvent::Revised {
         seq: r.seq,
         revision: r.revision,
@@ -133,264 +119,9 @@ fn revised(r: Revision, progress: u64) -> SessionEvent {
     }
 }
 
-fn halt_ending(h: Halt) -> Ending {
+pub(super) fn halt_ending(h: Halt) -> Ending {
     match h {
         Halt::Stop => Ending::Stopped,
         Halt::Shutdown => Ending::Interrupted,
     }
-}
-
-/// The learner's state checksum (not a hash of its safetensors bytes, whose metadata order
-/// varies from call to call).
-fn learner_digest(run: &EvaluativeRun) -> String {
-    format!("{:016x}", run.learner().state_checksum())
-}
-
-fn evaluative_checkpoint(run: &EvaluativeRun) -> Checkpoint {
-    Checkpoint {
-        progress: run.steps(),
-        answers: run.feedback_count(),
-        digest: learner_digest(run),
-        weights: Some(run.learner().to_safetensors()),
-    }
-}
-
-fn run_evaluative(
-    spec: &SessionSpec,
-    settings: SessionSettings,
-    mut run: EvaluativeRun,
-    mut ctx: SessionContext,
-    observer: Option<Box<dyn Observer>>,
-) -> Result<Ending, String> {
-    let human = spec.trainer == TrainerKind::Human;
-    let judge = if human {
-        let mut history = FrameHistory::new(settings.clip_frames);
-        history.start_episode(run.env().geometry(), run.env().render());
-        Judge::Human {
-            history,
-            graph: run.config().scene_graph,
-        }
-    } else {
-        Judge::Synthetic {
-            oracle: match run.config().method {
-                EvaluativeMethod::Sac => Box::new(NoTrainer),
-                _ => {
-                    let expert = load_task_expert(ctx.models_dir.as_deref(), spec.task)?;
-                    let act_dim = run.env().spec().action_space.dim();
-                    Box::new(ExpertOracle::new(expert, act_dim, OracleRule::Authors))
-                }
-            },
-            graph: run.config().scene_graph,
-        }
-    };
-    let sink = ctx.sink.clone();
-    let verify = ctx.verify.take();
-    let mut trainer = EvaluativeAsker {
-        asker: Asker::start(ctx, observer),
-        judge,
-    };
-
-    if let Some(o) = trainer.asker.observer.as_deref_mut() {
-        o.episode_start(0, 0, &run.env().geometry());
-    }
-    let period = Duration::from_secs_f64(1.0 / settings.pace_hz);
-    let mut next_tick = Instant::now();
-    let mut last_progress = Instant::now();
-    // The first frame a browser can see carries the geometry, as every episode's first does
-    // (after a resume, that is the first frame after the replay).
-    let (mut episode, mut episode_return, mut need_geometry) = (0u64, 0.0f64, true);
-    // The geometry of the episode being played (the env's is the next one's at an episode end).
-    let mut episode_geometry = run.env().geometry();
-    while run.steps() < spec.budget {
-        if let Some(h) = trainer.asker.controls.poll() {
-            return Ok(end_evaluative(h, &run, sink.as_ref(), false));
-        }
-        for r in trainer.asker.due_revisions(run.steps()) {
-            let label = r.value.and_then(AnswerValue::as_evaluation);
-            run.relabel(r.seq as usize, label.unwrap_or(Evaluation::NoFeedback));
-            sink.send(revised(r, run.steps()));
-        }
-        let report = run.step(&mut trainer);
-        if trainer.asker.aborted {
-            let h = trainer.asker.controls.halted().unwrap_or(Halt::Shutdown);
-            return Ok(end_evaluative(h, &run, sink.as_ref(), true));
-        }
-        episode_return += f64::from(report.reward);
-        if let Some(o) = trainer.asker.observer.as_deref_mut() {
-            let step = run.steps() - 1;
-            let state = report
-                .final_state
-                .clone()
-                .unwrap_or_else(|| run.env().render());
-            // At an episode's end `run` has already counted its return.
-            let cumulative = run.cumulative_return()
-                + if report.episode.is_some() {
-                    0.0
-                } else {
-                    episode_return
-                };
-            o.step(
-                step,
-                episode,
-                &state,
-                report.reward,
-                cumulative,
-                report.abstract_state,
-            );
-            if report.episode.is_some() {
-                o.episode_start(episode + 1, run.steps(), &run.env().geometry());
-            }
-        }
-        // Catching up on stored answers after a resume: no frames, no pacing.
-        let live = human && !trainer.asker.replaying();
-        if let Judge::Human { history, .. } = &mut trainer.judge {
-            // At an episode's end the env has already reset: show the state it ended in.
-            let state = report
-                .final_state
-                .clone()
-                .unwrap_or_else(|| run.env().render());
-            if report.episode.is_some() {
-                history.start_episode(run.env().geometry(), run.env().render());
-            } else {
-                history.push(state.clone());
-            }
-            if live {
-                sink.send(SessionEvent::Frame(Box::new(Frame {
-                    step: run.steps(),
-                    episode,
-                    state,
-                    geometry: std::mem::take(&mut need_geometry).then(|| episode_geometry.clone()),
-                    reward: report.reward,
-                    episode_return,
-                })));
-            }
-        }
-        if report.episode.is_some() {
-            need_geometry = true;
-            episode_geometry = run.env().geometry();
-        }
-        if let Some(e) = report.episode {
-            sink.send(SessionEvent::Episode(e));
-            episode += 1;
-            episode_return = 0.0;
-        }
-        check_replay(&verify, run.steps(), || learner_digest(&run))?;
-        if settings.checkpoint_every > 0 && run.steps().is_multiple_of(settings.checkpoint_every) {
-            sink.send(SessionEvent::Checkpoint(evaluative_checkpoint(&run)));
-        }
-        if last_progress.elapsed() >= PROGRESS_EVERY {
-            last_progress = Instant::now();
-            sink.send(SessionEvent::Progress {
-                progress: run.steps(),
-            });
-        }
-        if live {
-            next_tick += period;
-            let now = Instant::now();
-            if next_tick > now {
-                if let Some(h) = trainer.asker.controls.sleep(next_tick - now) {
-                    return Ok(end_evaluative(h, &run, sink.as_ref(), false));
-                }
-            } else {
-                // Running behind (a slow update or a long wait for an answer): go on at the
-                // pace from here rather than catching up in a burst.
-                next_tick = now;
-            }
-        }
-    }
-    sink.send(SessionEvent::Progress {
-        progress: run.steps(),
-    });
-    sink.send(SessionEvent::Checkpoint(evaluative_checkpoint(&run)));
-    Ok(Ending::Finished)
-}
-
-/// Leave early: on shutdown, checkpoint first unless the last step used an answer nobody gave
-/// (a replay could not reproduce it; the previous checkpoint stands).
-fn end_evaluative(h: Halt, run: &EvaluativeRun, sink: &dyn SessionSink, aborted: bool) -> Ending {
-    if h == Halt::Shutdown && !aborted {
-        sink.send(SessionEvent::Checkpoint(evaluative_checkpoint(run)));
-    }
-    halt_ending(h)
-}
-
-fn preference_checkpoint(run: &PreferenceRun) -> Checkpoint {
-    let mean: Vec<u8> = run
-        .belief()
-        .mean()
-        .iter()
-        .flat_map(|x| x.to_le_bytes())
-        .collect();
-    Checkpoint {
-        progress: run.queries() as u64,
-        answers: run.queries() as u64,
-        digest: digest(&mean),
-        weights: None,
-    }
-}
-
-fn run_preference(
-    spec: &SessionSpec,
-    mut run: PreferenceRun,
-    trajectories: Vec<Trajectory>,
-    mut ctx: SessionContext,
-    observer: Option<Box<dyn Observer>>,
-) -> Result<Ending, String> {
-    let comparer = match spec.trainer {
-        TrainerKind::Human => Comparer::Human {
-            task: spec.task,
-            env: run.config().env,
-            graph: run.config().scene_graph,
-            trajectories,
-        },
-        TrainerKind::Synthetic => Comparer::Synthetic {
-            oracle: SyntheticOracle::new(run.theta_true().to_vec()),
-            graph: run.config().scene_graph,
-        },
-    };
-    let sink = ctx.sink.clone();
-    let verify = ctx.verify.take();
-    let mut trainer = PreferenceAsker {
-        asker: Asker::start(ctx, observer),
-        comparer,
-    };
-    while (run.queries() as u64) < spec.budget {
-        if let Some(h) = trainer.asker.controls.poll() {
-            if h == Halt::Shutdown {
-                sink.send(SessionEvent::Checkpoint(preference_checkpoint(&run)));
-            }
-            return Ok(halt_ending(h));
-        }
-        let progress = run.queries() as u64;
-        for r in trainer.asker.due_revisions(progress) {
-            let preference = r.value.and_then(AnswerValue::as_preference);
-            run.revise(r.seq as usize, preference.unwrap_or(Preference::Skip));
-            sink.send(revised(r, progress));
-            sink.send(SessionEvent::Alignment {
-                queries: progress,
-                alignment: run.alignment(),
-                alignment_of_mean: run.alignment_of_mean(),
-            });
-        }
-        let Some(report) = run.step(&mut trainer) else {
-            break; // the method has no new pair left
-        };
-        if trainer.asker.aborted {
-            let h = trainer.asker.controls.halted().unwrap_or(Halt::Shutdown);
-            return Ok(halt_ending(h));
-        }
-        sink.send(SessionEvent::Alignment {
-            queries: report.query as u64,
-            alignment: report.alignment,
-            alignment_of_mean: report.alignment_of_mean,
-        });
-        sink.send(SessionEvent::Progress {
-            progress: run.queries() as u64,
-        });
-        check_replay(&verify, run.queries() as u64, || {
-            preference_checkpoint(&run).digest
-        })?;
-    }
-    sink.send(SessionEvent::Checkpoint(preference_checkpoint(&run)));
-    Ok(Ending::Finished)
 }

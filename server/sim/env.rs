@@ -3,6 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::frame::ImageFrame;
+
 /// A box-shaped space (Gymnasium's `Box`): per-dimension lower and upper bounds.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BoxSpace {
@@ -141,6 +143,14 @@ pub enum Geometry {
         /// The no-entry box under and beside the hoop, same layout as `workspace`.
         no_entry: [f32; 6],
     },
+    /// An environment in another process (`remote_env`): nothing to draw but its own frames.
+    Remote {
+        /// The id it declared (`LunarLanderContinuous-v3`, `my-robot`).
+        env: String,
+        /// Width and height of its frames (the episode's first), when it sends frames.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        frame_size: Option<[u32; 2]>,
+    },
     LunarLander {
         /// World size in units (20 x 13.333).
         world: [f32; 2],
@@ -184,7 +194,20 @@ pub enum RenderState {
         /// Side engine throttle this step: negative fires the left engine, positive the right.
         side_engine: f32,
     },
+    /// An environment in another process: the frame it rendered, if it was asked for one (people
+    /// watch) and can render, and its observation.
+    Remote {
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        frame: Option<ImageFrame>,
+        observation: Vec<f32>,
+    },
 }
+
+/// Why an environment could not answer: one in another process that is unreachable, too slow,
+/// sends what the protocol does not allow, or went away. The built-in tasks never fail.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct EnvFault(pub String);
 
 /// A simulated task. Deterministic: the same seed and the same actions give bit-identical
 /// observations and rewards.
@@ -207,6 +230,35 @@ pub trait Env: Send {
     fn render(&self) -> RenderState;
 
     fn geometry(&self) -> Geometry;
+
+    /// `reset` for callers that may hold an env that can fail (one in another process); the
+    /// built-in tasks never do.
+    fn try_reset(&mut self, seed: u64) -> Result<Vec<f32>, EnvFault> {
+        Ok(self.reset(seed))
+    }
+
+    /// `step` for callers that may hold an env that can fail. After an `Err` the episode is
+    /// lost: reset (or reconnect) before stepping again.
+    fn try_step(&mut self, action: &[f32]) -> Result<Step, EnvFault> {
+        Ok(self.step(action))
+    }
+
+    /// The scene-graph predicates that hold after the last step, bit `i` for declared predicate
+    /// `i`, when the env evaluates its own scene graph (an env in another process that declared
+    /// predicates); `None`: the task's graph is evaluated on the observation.
+    fn reported_predicates(&self) -> Option<u32> {
+        None
+    }
+
+    /// DRPL's features phi of the last step, when the env computes them itself.
+    fn reported_features(&self) -> Option<&[f64]> {
+        None
+    }
+
+    /// Render with every later reset and step (`render` then shows it): an env that sends
+    /// images from another process does so only while asked, since a frame costs it more than
+    /// a step. The built-in tasks' render states cost nothing, and they ignore this.
+    fn set_frames(&mut self, _on: bool) {}
 }
 
 /// Serde defaults for render files written before the gradual gripper existed.

@@ -6,8 +6,12 @@
 //! - `reaching`, `placing`: table-top tasks on rapier3d (`tabletop` holds their shared world).
 //! - `lunar_lander`: Gymnasium's `LunarLanderContinuous-v3` on rapier2d.
 //! - `rollout`: run a random or heuristic policy for whole episodes and summarise them.
+//! - `frame`, `interned`: what an env in another process brings (its own rendered frames, the
+//!   names it declares at run time); the client itself lives in `remote_env`.
 
 mod env;
+mod frame;
+pub mod interned;
 pub mod lunar_lander;
 mod options;
 pub mod placing;
@@ -16,9 +20,11 @@ pub mod rollout;
 mod tabletop;
 mod task;
 
-pub use env::{BoxSpace, Cuboid, Env, EnvSpec, Geometry, Outcome, Pose2, Pose3, RenderState, Step};
-pub use options::{
-    DEFAULT_RELEASE_AT, EnvOptions, GripObservation, KEYS as ENV_OPTION_KEYS, PlacingSuccess,
-    Variant,
+pub use env::{
+    BoxSpace, Cuboid, Env, EnvFault, EnvSpec, Geometry, Outcome, Pose2, Pose3, RenderState, Step,
 };
-pub use task::{Task, UnknownTask};
+pub use frame::{ImageFrame, MediaType};
+pub use options::{
+    DEFAULT_RELEASE_AT, EnvOptions, GripObservation, PlacingSuccess, Start, Variant,
+};
+pub use task::{DeclaredTask, Task, TaskRef, UnknownTask};

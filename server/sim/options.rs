@@ -11,10 +11,8 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
-use super::Task;
-
 /// The start pose, speed and gripper of Reaching and Placing.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Variant {
     /// The authors' tasks: the robot's home pose with 5 % reset noise, 1.2 cm per step, and
@@ -26,8 +24,19 @@ pub enum Variant {
     Uniform,
 }
 
+/// Where an episode of Reaching or Placing starts, before its reset moves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Start {
+    /// \[authors\] The robot's home pose.
+    Home,
+    /// Anywhere over the table (the first version's start; the paper's for DRPL's random
+    /// trajectories: "agents starting at random positions and taking random actions").
+    Uniform,
+}
+
 /// When a released ball counts as placed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum PlacingSuccess {
     /// \[authors\] Released while its centre is over the opening and above the ring: success at
@@ -39,7 +48,7 @@ pub enum PlacingSuccess {
 }
 
 /// What Placing's fourth observation `g` holds.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum GripObservation {
     /// \[authors\] The sign of the last gripper command: -1 if it was "open", else +1.
@@ -59,6 +68,9 @@ pub const DEFAULT_RELEASE_AT: f32 = 0.88;
 #[serde(default, deny_unknown_fields)]
 pub struct EnvOptions {
     pub variant: Variant,
+    /// Where episodes start; `None` is the variant's own (`home` for the authors' variant,
+    /// `uniform` for the first version).
+    pub start: Option<Start>,
     /// Placing's success rule; `None` is the variant's own (`over` for the authors' variant,
     /// `through` for the uniform one).
     pub success: Option<PlacingSuccess>,
@@ -71,6 +83,7 @@ impl Default for EnvOptions {
     fn default() -> Self {
         Self {
             variant: Variant::Authors,
+            start: None,
             success: None,
             observe_grip: GripObservation::Sign,
             release_at: DEFAULT_RELEASE_AT,
@@ -78,72 +91,21 @@ impl Default for EnvOptions {
     }
 }
 
-/// The keys [`EnvOptions::set`] takes, for error messages and the settings lists.
-pub const KEYS: [&str; 4] = ["variant", "success", "observe_grip", "release_at"];
-
 impl EnvOptions {
+    /// Where episodes start after the variant's default is applied.
+    pub fn start_pose(&self) -> Start {
+        self.start.unwrap_or(match self.variant {
+            Variant::Authors => Start::Home,
+            Variant::Uniform => Start::Uniform,
+        })
+    }
+
     /// Placing's success rule after the variant's default is applied.
     pub fn placing_success(&self) -> PlacingSuccess {
         self.success.unwrap_or(match self.variant {
             Variant::Authors => PlacingSuccess::Over,
             Variant::Uniform => PlacingSuccess::Through,
         })
-    }
-
-    /// Whether `key` is one of ours (so callers can route other keys elsewhere).
-    pub fn owns(key: &str) -> bool {
-        KEYS.contains(&key)
-    }
-
-    /// Set one switch by name (`--set`, TOML files, a session's `params`), checking that it
-    /// applies to `task`.
-    pub fn set(&mut self, task: Task, key: &str, value: &str) -> Result<(), String> {
-        let bad = |what: &str| format!("{key}={value}: expected {what}");
-        let placing_only = || -> Result<(), String> {
-            if task == Task::Placing {
-                Ok(())
-            } else {
-                Err(format!("{key} applies to placing only, not {task}"))
-            }
-        };
-        match key {
-            "variant" => {
-                if task == Task::LunarLander {
-                    return Err(format!("{key} applies to reaching and placing, not {task}"));
-                }
-                self.variant = match value {
-                    "authors" => Variant::Authors,
-                    "uniform" => Variant::Uniform,
-                    _ => return Err(bad("authors or uniform")),
-                };
-            }
-            "success" => {
-                placing_only()?;
-                self.success = Some(match value {
-                    "over" => PlacingSuccess::Over,
-                    "through" => PlacingSuccess::Through,
-                    _ => return Err(bad("over or through")),
-                });
-            }
-            "observe_grip" => {
-                placing_only()?;
-                self.observe_grip = match value {
-                    "sign" => GripObservation::Sign,
-                    "level" => GripObservation::Level,
-                    _ => return Err(bad("sign or level")),
-                };
-            }
-            "release_at" => {
-                placing_only()?;
-                self.release_at = value
-                    .parse::<f32>()
-                    .ok()
-                    .filter(|x| (-1.0..1.0).contains(x))
-                    .ok_or_else(|| bad("a number in [-1, 1)"))?;
-            }
-            _ => return Err(format!("unknown env option {key:?}")),
-        }
-        Ok(())
     }
 }
 
@@ -171,30 +133,6 @@ mod tests {
             ..o
         };
         assert_eq!(uniform.placing_success(), PlacingSuccess::Through);
-    }
-
-    #[test]
-    fn set_checks_keys_values_and_tasks() {
-        let mut o = EnvOptions::default();
-        o.set(Task::Placing, "variant", "uniform").unwrap();
-        o.set(Task::Placing, "success", "over").unwrap();
-        o.set(Task::Placing, "observe_grip", "level").unwrap();
-        o.set(Task::Placing, "release_at", "0.9").unwrap();
-        assert_eq!(
-            o,
-            EnvOptions {
-                variant: Variant::Uniform,
-                success: Some(PlacingSuccess::Over),
-                observe_grip: GripObservation::Level,
-                release_at: 0.9,
-            }
-        );
-        assert!(o.set(Task::Placing, "variant", "robosuite").is_err());
-        assert!(o.set(Task::Placing, "release_at", "1.5").is_err());
-        assert!(o.set(Task::Placing, "release_at", "NaN").is_err());
-        assert!(o.set(Task::Reaching, "success", "over").is_err());
-        assert!(o.set(Task::LunarLander, "variant", "uniform").is_err());
-        o.set(Task::Reaching, "variant", "authors").unwrap();
     }
 
     #[test]

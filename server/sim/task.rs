@@ -7,7 +7,19 @@ use serde::{Deserialize, Serialize};
 
 use super::{Env, EnvOptions, lunar_lander, placing, reaching};
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    PartialOrd,
+    Ord,
+    Serialize,
+    Deserialize,
+    utoipa::ToSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum Task {
     Reaching,
@@ -35,7 +47,7 @@ impl Task {
     /// The task's env built with `options` (Lunar Lander has none and ignores them).
     pub fn make_env_with(self, options: &EnvOptions) -> Box<dyn Env> {
         match self {
-            Task::Reaching => Box::new(reaching::Reaching::with_variant(options.variant)),
+            Task::Reaching => Box::new(reaching::Reaching::with_options(options)),
             Task::Placing => Box::new(placing::Placing::with_options(*options)),
             Task::LunarLander => Box::new(lunar_lander::LunarLander::new()),
         }
@@ -52,6 +64,62 @@ impl Task {
 }
 
 impl fmt::Display for Task {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.id())
+    }
+}
+
+/// Which task a run trains on: one of ours (on our simulator, or on a copy of it in another
+/// process), or one that an environment in another process declared about itself. Written as
+/// the task's name for ours (so configs and checkpoints read as before) and as an object for a
+/// declared one.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum TaskRef {
+    Builtin(Task),
+    Declared(DeclaredTask),
+}
+
+/// What a run needs to know of a task an environment declared (`docs/env-protocol.md`); its
+/// predicates are in the run's `SceneGraph::Declared`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DeclaredTask {
+    /// The id the env declared (`Pendulum-v1`, `my-robot`).
+    pub env: String,
+    /// DRPL's feature names: the env's own features, or its observation's entries when it
+    /// declares none.
+    pub features: Vec<String>,
+    /// Whether the env computes the features (else they are the observation).
+    #[serde(default)]
+    pub env_features: bool,
+}
+
+impl TaskRef {
+    /// One of ours, if it is.
+    pub fn builtin(&self) -> Option<Task> {
+        match self {
+            TaskRef::Builtin(t) => Some(*t),
+            TaskRef::Declared(_) => None,
+        }
+    }
+
+    /// The name files, logs and the API use: ours by name, a declared one by its env's id.
+    pub fn id(&self) -> &str {
+        match self {
+            TaskRef::Builtin(t) => t.id(),
+            TaskRef::Declared(d) => &d.env,
+        }
+    }
+}
+
+impl From<Task> for TaskRef {
+    fn from(task: Task) -> Self {
+        TaskRef::Builtin(task)
+    }
+}
+
+impl fmt::Display for TaskRef {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.id())
     }

@@ -21,10 +21,10 @@ pub struct QueryRow {
 }
 
 /// One answered query, as `GET /api/sessions/{id}/answers` lists it.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, utoipa::ToSchema)]
 pub struct AnswerRow {
+    /// The session's query number (the query's id on the websocket).
     pub query_id: i64,
-    pub seq: i64,
     pub kind: QueryKind,
     pub step: i64,
     pub abstract_state: i64,
@@ -65,6 +65,17 @@ pub(super) fn parse_value(text: &str) -> AnswerValue {
 }
 
 impl Store {
+    /// How many query numbers a session has used (its highest `seq` + 1): a session on a
+    /// remote env numbers new queries after all of them.
+    pub async fn query_count(&self, session_id: &str) -> Result<u64> {
+        let row =
+            sqlx::query("SELECT COALESCE(MAX(seq) + 1, 0) AS n FROM queries WHERE session_id = ?")
+                .bind(session_id)
+                .fetch_one(self.pool())
+                .await?;
+        Ok(row.get::<i64, _>("n") as u64)
+    }
+
     /// Store a query (or find it again: a resumed session re-asks an unanswered query with the
     /// same `seq`) and return its id.
     pub async fn upsert_query(
@@ -94,11 +105,14 @@ impl Store {
         Ok(row.get("id"))
     }
 
-    pub async fn query(&self, id: i64) -> Result<Option<QueryRow>> {
+    /// A session's query by its number (its id on the wire).
+    pub async fn query_by_number(&self, session_id: &str, seq: u64) -> Result<Option<QueryRow>> {
         let row = sqlx::query(
-            "SELECT id, session_id, seq, kind, step, abstract_state, asked_at FROM queries WHERE id = ?",
+            "SELECT id, session_id, seq, kind, step, abstract_state, asked_at FROM queries
+             WHERE session_id = ? AND seq = ?",
         )
-        .bind(id)
+        .bind(session_id)
+        .bind(seq as i64)
         .fetch_optional(self.pool())
         .await?;
         Ok(row.map(|r| QueryRow {
@@ -110,15 +124,6 @@ impl Store {
             abstract_state: r.get("abstract_state"),
             asked_at: r.get("asked_at"),
         }))
-    }
-
-    /// The stored payload (JSON text) of a query.
-    pub async fn query_payload(&self, id: i64) -> Result<Option<String>> {
-        let row = sqlx::query("SELECT payload FROM queries WHERE id = ?")
-            .bind(id)
-            .fetch_optional(self.pool())
-            .await?;
-        Ok(row.map(|r| r.get("payload")))
     }
 
     /// Commit an answer; returns only after the transaction is durable. Answers committing at
@@ -220,7 +225,7 @@ impl Store {
     /// Every answered query of a session, in the order asked.
     pub async fn answers(&self, session_id: &str) -> Result<Vec<AnswerRow>> {
         let rows = sqlx::query(
-            "SELECT q.id, q.seq, q.kind, q.step, q.abstract_state, q.asked_at,
+            "SELECT q.seq, q.kind, q.step, q.abstract_state, q.asked_at,
                     a.value, a.who, a.answered_at, a.latency_ms, a.revision
              FROM answers a JOIN queries q ON q.id = a.query_id
              WHERE a.session_id = ? ORDER BY q.seq",
@@ -231,8 +236,7 @@ impl Store {
         Ok(rows
             .iter()
             .map(|r| AnswerRow {
-                query_id: r.get("id"),
-                seq: r.get("seq"),
+                query_id: r.get("seq"),
                 kind: r.get("kind"),
                 step: r.get("step"),
                 abstract_state: r.get("abstract_state"),
@@ -269,7 +273,7 @@ impl Store {
 }
 
 /// A session's answers counted.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, utoipa::ToSchema)]
 pub struct AnswerCounts {
     pub total: i64,
     pub by_trainer: i64,

@@ -16,7 +16,7 @@ use crate::http::auth::SessionAccess;
 use crate::http::error::ApiError;
 use crate::hub::{AnswerReply, Joined, SessionHandle};
 use crate::protocol::{
-    ClientMessage, ErrorCode, ProtocolError, QueryKind, ServerMessage, id_of, parse_client,
+    ClientMessage, ErrorCode, ProtocolError, QueryId, QueryKind, ServerMessage, id_of, parse_client,
 };
 use crate::scene_graph::SceneGraph;
 use crate::store::SessionRow;
@@ -27,6 +27,21 @@ pub const MAX_MESSAGE_BYTES: usize = 4 * 1024;
 const ANSWER_RATE: f64 = 20.0;
 const ANSWER_BURST: f64 = 40.0;
 
+/// The trainer's websocket: JSON messages, one typed enum each way (`docs/protocol.md`).
+#[utoipa::path(
+    get,
+    path = "/ws/sessions/{id}",
+    tag = "trainers",
+    security(()),
+    params(
+        ("id" = String, Path, description = "The session"),
+        ("token" = String, Query, description = "The session's trainer token (from its trainer_url), or the researcher token")
+    ),
+    responses(
+        (status = 101, description = "Switching to the websocket protocol"),
+        (status = "default", description = "An error", body = crate::http::openapi::ErrorBody)
+    )
+)]
 pub async fn upgrade(
     State(state): State<AppState>,
     SessionAccess(row): SessionAccess,
@@ -50,14 +65,15 @@ fn text(s: &str) -> Message {
 fn hello(
     row: &SessionRow,
     geometry: Option<crate::sim::Geometry>,
+    live_graph: Option<SceneGraph>,
     status: crate::store::Status,
 ) -> ServerMessage {
     let spec = row.spec().ok();
-    let task = spec.as_ref().map_or(crate::sim::Task::Reaching, |s| s.task);
-    let graph = spec
-        .as_ref()
-        .and_then(|s| s.scene_graph().ok())
-        .unwrap_or_else(|| SceneGraph::for_task(task));
+    let task = spec.as_ref().map_or("reaching", |s| s.task_name());
+    // The running session's graph (a remote env's own task declares it), else the spec's.
+    let graph = live_graph
+        .or_else(|| spec.as_ref().and_then(|s| s.scene_graph().ok()))
+        .unwrap_or(SceneGraph::Declared(&[]));
     let pace_hz = spec
         .as_ref()
         .and_then(|s| s.settings().ok())
@@ -108,9 +124,10 @@ async fn serve(state: AppState, row: SessionRow, mut socket: WebSocket) {
     let session = state.hub.session(&row.id);
     let snapshot = session.as_ref().map(SessionHandle::snapshot);
     let status = snapshot.as_ref().map_or(row.status, |s| s.status);
+    let live_graph = snapshot.as_ref().and_then(|s| s.graph);
     let geometry = snapshot.and_then(|s| s.geometry);
     if socket
-        .send(text(&hello(&row, geometry, status).to_text()))
+        .send(text(&hello(&row, geometry, live_graph, status).to_text()))
         .await
         .is_err()
     {
@@ -202,7 +219,7 @@ async fn refuse_until_closed(mut socket: WebSocket) {
     }
 }
 
-fn session_ended(id: Option<i64>) -> ServerMessage {
+fn session_ended(id: Option<QueryId>) -> ServerMessage {
     ProtocolError::session_ended().to_message(id)
 }
 

@@ -3,6 +3,8 @@
 pub mod binary;
 pub mod cli;
 pub mod counting_alloc;
+pub mod python_client;
 pub mod rerun_py;
 pub mod server;
+pub mod slurm_cluster;
 pub mod trainer;

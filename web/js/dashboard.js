@@ -63,31 +63,25 @@ function buildForm() {
   if ($("task").options.length) return;
   const t = state.tasks;
   for (const task of t.tasks) $("task").append(option(task.id));
+  // A remote env's own task (needs an env URL): its predicates come from the env.
+  $("task").append(option("remote", "remote (the env's own task)"));
   const ev = $("method");
   const g1 = Object.assign(document.createElement("optgroup"), { label: "evaluative (steps)" });
   for (const m of t.methods.evaluative.filter((m) => !m.includes("<"))) g1.append(option(m));
   const g2 = Object.assign(document.createElement("optgroup"), { label: "preference (queries)" });
   for (const m of t.methods.preference) g2.append(option(m));
   ev.append(g1, g2);
-  $("pace_hz").placeholder = String(t.session_params.pace_hz);
-  $("answer_timeout_s").placeholder = String(t.session_params.answer_timeout_s);
   $("task").addEventListener("change", fillDefaults);
   $("method").addEventListener("change", fillDefaults);
   $("launch-form").addEventListener("submit", launch);
   fillDefaults();
 }
 
-function currentTask() {
-  return state.tasks.tasks.find((t) => t.id === $("task").value);
-}
+/** A remote env's own task: nothing known before the env is reached but the budgets. */
+const REMOTE_TASK = { id: "remote", defaults: { steps: 100000, queries: 40 }, settings: { evaluative: {}, preference: {} } };
 
-/** Flatten a defaults object one level: nested groups show their inner keys. */
-function flatten(obj, out = {}) {
-  for (const [k, v] of Object.entries(obj ?? {})) {
-    if (v && typeof v === "object" && !Array.isArray(v)) flatten(v, out);
-    else out[k] = v;
-  }
-  return out;
+function currentTask() {
+  return state.tasks.tasks.find((t) => t.id === $("task").value) ?? REMOTE_TASK;
 }
 
 function fillDefaults() {
@@ -95,12 +89,14 @@ function fillDefaults() {
   const pref = isPreference($("method").value);
   $("budget-label").textContent = pref ? "Queries" : "Steps";
   $("budget").placeholder = String(pref ? task.defaults.queries : task.defaults.steps);
-  const defaults = flatten(pref ? task.defaults.drpl : task.defaults.dref);
-  const extra = { checkpoint_every: state.tasks.session_params.checkpoint_every, clip_frames: state.tasks.session_params.clip_frames };
+  // The server's one list of settings, at their defaults for this task and method family.
+  const settings = task.settings[pref ? "preference" : "evaluative"];
+  $("pace_hz").placeholder = String(settings.pace_hz ?? 20);
+  $("answer_timeout_s").placeholder = String(settings.answer_timeout_s ?? 60);
   const box = $("params");
   box.replaceChildren();
-  for (const [k, v] of Object.entries({ ...defaults, ...extra })) {
-    if (["task", "method", "seed", "steps", "queries"].includes(k)) continue;
+  for (const [k, v] of Object.entries(settings)) {
+    if (["pace_hz", "answer_timeout_s"].includes(k)) continue;
     const label = document.createElement("label");
     label.textContent = k;
     const input = Object.assign(document.createElement("input"), { name: `param:${k}`, placeholder: JSON.stringify(v) });
@@ -122,6 +118,15 @@ async function launch(ev) {
   ev.preventDefault();
   const method = $("method").value;
   const body = { task: $("task").value, method, trainer: $("trainer").value, seed: Number($("seed").value || 0), params: {} };
+  const envUrl = $("env_url").value.trim();
+  if (envUrl) body.env = { url: envUrl };
+  if (body.task === "remote") {
+    if (!envUrl) {
+      notify("The task 'remote' is an env's own task: give its env URL.", { kind: "error" });
+      return;
+    }
+    delete body.task;
+  }
   if ($("budget").value) body[isPreference(method) ? "queries" : "steps"] = Number($("budget").value);
   for (const k of ["pace_hz", "answer_timeout_s"]) if ($(k).value) body.params[k] = Number($(k).value);
   for (const input of $("params").querySelectorAll("input")) {
@@ -193,7 +198,7 @@ function row(s) {
     return c;
   };
   td(Object.assign(document.createElement("code"), { textContent: s.id }));
-  td(s.task);
+  td(s.env ? `${s.task} @ ${s.env.url}` : s.task);
   td(s.method);
   td(s.trainer);
   td(Object.assign(document.createElement("span"), { className: `pill ${s.status}`, textContent: s.status, title: s.reason ?? "" }));

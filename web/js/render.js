@@ -30,13 +30,14 @@ const COLORS = {
 
 /** The views a task is drawn in. */
 export function viewsFor(task) {
+  if (task === "remote") return ["frame"];
   if (task === "placing") return ["top", "side"];
   if (task === "lunar-lander") return ["side"];
   return ["top"];
 }
 
 export function viewLabel(task, view) {
-  if (task === "lunar-lander") return "";
+  if (task === "lunar-lander" || task === "remote") return "";
   return view === "top" ? "from above" : "from the side";
 }
 
@@ -59,6 +60,12 @@ export function viewBounds(geometry, view) {
       const t = geometry.table;
       const tableTop = t.center[2] + t.half_extents[2];
       return [Math.min(...xs) - m, tableTop - 0.06, Math.max(...xs) + m, w[5] + m];
+    }
+    case "remote": {
+      // An env in another process draws itself: its frames' size (Gymnasium's 600 x 400 until
+      // one arrives).
+      const [w, h] = geometry.frame_size ?? [600, 400];
+      return [0, 0, w, h];
     }
     case "lunar-lander":
       // The lander starts at the world's top edge (Gymnasium's y = H), so a unit of headroom
@@ -482,15 +489,61 @@ export function drawScene(canvas, geometry, state, view, opts = {}) {
     case "lunar-lander":
       drawLunar(ctx, T, geometry, state, opts, dpr);
       break;
+    case "remote":
+      drawRemote(canvas, ctx, geometry, state, view, opts, dpr);
+      break;
     default:
       break;
   }
   label(ctx, opts.label ?? viewLabel(geometry.task, view), dpr);
 }
 
+// ---- an env in another process: its own frames ---------------------------------------------
+
+/** Decoded frames by their base64 data, the latest few (a clip loops over them). */
+const FRAME_IMAGES = new Map();
+const FRAME_IMAGES_KEPT = 240;
+
+/** The frame's decoded image, or null while it decodes (`onReady` runs once it has). */
+function frameImage(frame, onReady) {
+  let img = FRAME_IMAGES.get(frame.data);
+  if (!img) {
+    img = new Image();
+    img.src = `data:${frame.media_type};base64,${frame.data}`;
+    FRAME_IMAGES.set(frame.data, img);
+    if (FRAME_IMAGES.size > FRAME_IMAGES_KEPT) FRAME_IMAGES.delete(FRAME_IMAGES.keys().next().value);
+  }
+  if (img.complete && img.naturalWidth > 0) return img;
+  img.addEventListener("load", onReady, { once: true });
+  return null;
+}
+
+/** The env's frame scaled into the canvas; without one (the env does not render), its
+ * observation as numbers. */
+function drawRemote(canvas, ctx, geometry, state, view, opts, dpr) {
+  canvas.dataset.drawn = state?.frame?.data?.slice(-16) ?? "";
+  ctx.fillStyle = COLORS.sky;
+  ctx.fillRect(0, 0, canvas.width, canvas.height);
+  if (!state) return;
+  if (state.frame) {
+    const img = frameImage(state.frame, () => {
+      // Still the frame this canvas should show: draw it now that it has decoded.
+      if (canvas.dataset.drawn === state.frame.data.slice(-16)) drawScene(canvas, geometry, state, view, opts);
+    });
+    if (img) ctx.drawImage(img, 0, 0, canvas.width, canvas.height);
+    return;
+  }
+  ctx.fillStyle = "#f3f4f6";
+  ctx.font = `${13 * dpr}px system-ui, sans-serif`;
+  const values = (state.observation ?? []).map((v) => v.toFixed(3));
+  ctx.fillText(`${geometry.env}: observation`, 10 * dpr, 22 * dpr);
+  values.slice(0, 24).forEach((v, i) => ctx.fillText(`[${i}] ${v}`, 10 * dpr, (44 + 18 * i) * dpr));
+}
+
 /** Words for an action, next to its arrow. */
 export function describeAction(task, action) {
   if (!action) return "";
+  if (task === "remote") return `acts [${action.map((v) => clamp(v).toFixed(2)).join(", ")}] (scaled to its range)`;
   const a = action.map((v) => clamp(v));
   const pct = (v) => `${Math.round(Math.abs(v) * 100)}%`;
   if (task === "lunar-lander") {

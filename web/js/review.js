@@ -141,7 +141,7 @@ function timeline(answers) {
     add("line", { x1: xa, y1: y(a.value), x2: Math.max(xb, xa + 1), y2: y(a.value), stroke: color(a.value), "stroke-width": 3, opacity: 0.4 });
     const c = add("circle", { cx: xb, cy: y(a.value), r: 5, fill: color(a.value) });
     const title = document.createElementNS(NS, "title");
-    title.textContent = `query ${a.seq}: ${valueWords(a.value)} by ${a.who}, ${a.latency_ms} ms after it was asked`;
+    title.textContent = `query ${a.query_id}: ${valueWords(a.value)} by ${a.who}, ${a.latency_ms} ms after it was asked`;
     c.append(title);
   }
   const pos = answers[0].kind === "preference" ? ["left", "right"] : ["good", "bad"];
@@ -223,7 +223,7 @@ async function load() {
     ...answers.map((a) => {
       const tr = document.createElement("tr");
       const cls = a.value === 1 || a.value === "left" ? "value-good" : a.value === -1 || a.value === "right" ? "value-bad" : "";
-      tr.append(text("td", String(a.seq), "num"), text("td", a.kind), text("td", String(a.step), "num"), text("td", valueWords(a.value), cls), text("td", a.who), text("td", `${(a.latency_ms / 1000).toFixed(2)} s`, "num"), text("td", new Date(a.answered_at).toLocaleTimeString()));
+      tr.append(text("td", String(a.query_id), "num"), text("td", a.kind), text("td", String(a.step), "num"), text("td", valueWords(a.value), cls), text("td", a.who), text("td", `${(a.latency_ms / 1000).toFixed(2)} s`, "num"), text("td", new Date(a.answered_at).toLocaleTimeString()));
       return tr;
     }),
   );

@@ -18,7 +18,8 @@ export function buildStage(container, geometry, { maxHeight = "58vh" } = {}) {
     canvas.style.width = `min(100%, calc(${maxHeight} * ${ratio.toFixed(4)}))`;
     canvas.style.margin = "0 auto";
     canvas.setAttribute("role", "img");
-    canvas.setAttribute("aria-label", `${geometry.task} ${view === "top" ? "from above" : "from the side"}`);
+    const what = geometry.task === "remote" ? `${geometry.env}` : `${geometry.task} ${view === "top" ? "from above" : "from the side"}`;
+    canvas.setAttribute("aria-label", what);
     wrap.append(canvas);
     container.append(wrap);
     return { canvas, view };

@@ -276,8 +276,12 @@ function onMessage(msg) {
   switch (msg.type) {
     case "hello":
       page.hello = msg;
-      $("title").textContent = `${TASK_NAMES[msg.task] ?? msg.task} · ${msg.method.toUpperCase()}`;
-      document.title = `${TASK_NAMES[msg.task] ?? msg.task} · Teach the robot`;
+      {
+        // A remote env's own task is called by its env's id, once the session has one.
+        const name = msg.task === "remote" && msg.geometry?.env ? msg.geometry.env : TASK_NAMES[msg.task] ?? msg.task;
+        $("title").textContent = `${name} · ${msg.method.toUpperCase()}`;
+        document.title = `${name} · Teach the robot`;
+      }
       setPill($("status"), msg.status, msg.status);
       setGeometry(msg.geometry);
       if (!page.query && !page.ended) {

@@ -1,23 +1,32 @@
-//! Progress of a grid: an indicatif bar of finished/total runs with elapsed time and ETA on a
-//! terminal, one plain line per event otherwise (logs, CI, `nohup`).
+//! Progress of a grid, every run queued, running, finished or failed: an indicatif bar of
+//! finished/total runs with elapsed time, ETA and the counts on a terminal, one plain line per
+//! event otherwise (logs, CI, `nohup`).
 
-use std::cell::Cell;
+use std::cell::RefCell;
 use std::io::IsTerminal;
 use std::rc::Rc;
 use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::report::grid::RunSpec;
 use crate::report::runner::{Event, RunStatus};
 
-/// Prints the grid's progress; cheap to clone (the bar is shared), so the follow-up hook can
-/// print through the same bar without tearing it.
+/// Prints the grid's progress; cheap to clone (the bar and the counts are shared), so the
+/// follow-up hook can print through the same bar without tearing it.
 #[derive(Clone)]
 pub struct Progress {
     bar: Option<ProgressBar>,
     total: usize,
-    done: Rc<Cell<usize>>,
+    board: Rc<RefCell<Board>>,
+}
+
+/// Which runs are where, by label.
+#[derive(Default)]
+struct Board {
+    queued: Vec<String>,
+    running: Vec<String>,
+    done: usize,
+    failed: usize,
 }
 
 impl Progress {
@@ -39,7 +48,7 @@ impl Progress {
         Self {
             bar,
             total,
-            done: Rc::new(Cell::new(0)),
+            board: Rc::default(),
         }
     }
 
@@ -52,39 +61,30 @@ impl Progress {
     }
 
     /// Shows one of the runner's events.
-    pub fn event(&self, event: &Event<'_>, running: &[String]) {
-        match event {
-            Event::Added(_) => {}
-            Event::Started(spec) => match &self.bar {
-                Some(bar) => bar.set_message(running_message(running)),
-                None => println!("start {}", spec.label()),
-            },
-            Event::Finished(outcome) => {
-                let label = outcome.spec.label();
-                let done = self.done.get() + 1;
-                self.done.set(done);
-                let text = match &outcome.status {
-                    RunStatus::Skipped => format!("skip  {label} (already finished)"),
-                    RunStatus::Succeeded => format!("done  {label} ({:.1} s)", outcome.seconds),
-                    RunStatus::Failed(why) => format!(
-                        "FAIL  {label}: {why} (see {})",
-                        outcome.spec.dir.join("stderr.log").display()
-                    ),
-                };
-                match &self.bar {
-                    Some(bar) => {
-                        // Skips and failures deserve a line; a success shows in the count.
-                        if !matches!(outcome.status, RunStatus::Succeeded) {
-                            bar.println(&text);
-                        }
-                        bar.inc(1);
-                        bar.set_message(running_message(running));
-                        if outcome.status == RunStatus::Skipped {
-                            // Instant skips would make the rate, and so the ETA, meaningless.
-                            bar.reset_eta();
-                        }
+    pub fn event(&self, event: &Event<'_>) {
+        let text = self.board.borrow_mut().track(event, self.total);
+        match &self.bar {
+            Some(bar) => {
+                if let Event::Finished(outcome) = event {
+                    bar.inc(1);
+                    if outcome.status == RunStatus::Skipped {
+                        // Instant skips would make the rate, and so the ETA, meaningless.
+                        bar.reset_eta();
                     }
-                    None => println!("[{done}/{}] {text}", self.total),
+                }
+                // Successes and plain starts show in the counts; the rest deserve a line.
+                let quiet = matches!(
+                    event,
+                    Event::Started(_) | Event::Queued { .. } | Event::Added(_)
+                ) || matches!(event, Event::Finished(o) if o.status == RunStatus::Succeeded);
+                if let Some(text) = text.filter(|_| !quiet) {
+                    bar.println(text);
+                }
+                bar.set_message(self.board.borrow().message());
+            }
+            None => {
+                if let Some(text) = text {
+                    println!("{text}");
                 }
             }
         }
@@ -93,27 +93,75 @@ impl Progress {
     /// Removes the bar, leaving its last state on screen.
     pub fn finish(&self) {
         if let Some(bar) = &self.bar {
-            bar.finish_with_message("");
+            bar.finish_with_message(self.board.borrow().message());
         }
     }
 }
 
-fn running_message(running: &[String]) -> String {
-    match running {
-        [] => String::new(),
-        [one] => format!("running {one}"),
-        [first, rest @ ..] => format!("running {first} and {} more", rest.len()),
+impl Board {
+    /// Moves the run an event is about; returns the event's line, if it has one.
+    fn track(&mut self, event: &Event<'_>, total: usize) -> Option<String> {
+        match event {
+            Event::Added(_) => None,
+            Event::Note(text) => Some(text.to_string()),
+            Event::Queued { spec, job } => {
+                let label = spec.label();
+                let requeued = remove(&mut self.running, &label);
+                self.queued.push(label.clone());
+                match (job, requeued) {
+                    (Some(job), true) => Some(format!("again {label} (Slurm task {job} requeued)")),
+                    (Some(job), false) => Some(format!("queue {label} (Slurm task {job})")),
+                    (None, _) => None,
+                }
+            }
+            Event::Started(spec) => {
+                let label = spec.label();
+                remove(&mut self.queued, &label);
+                self.running.push(label.clone());
+                Some(format!("start {label}"))
+            }
+            Event::Finished(outcome) => {
+                let label = outcome.spec.label();
+                remove(&mut self.queued, &label);
+                remove(&mut self.running, &label);
+                self.done += 1;
+                let text = match &outcome.status {
+                    RunStatus::Skipped => format!("skip  {label} (already finished)"),
+                    RunStatus::Succeeded => format!("done  {label} ({:.1} s)", outcome.seconds),
+                    RunStatus::Failed(why) => {
+                        self.failed += 1;
+                        format!(
+                            "FAIL  {label}: {why} (see {})",
+                            outcome.spec.dir.join("stderr.log").display()
+                        )
+                    }
+                };
+                Some(format!("[{}/{total}] {text}", self.done))
+            }
+        }
+    }
+
+    /// The bar's message: what runs, how many wait, how many failed.
+    fn message(&self) -> String {
+        let mut parts = Vec::new();
+        match self.running.as_slice() {
+            [] => {}
+            [one] => parts.push(format!("running {one}")),
+            [first, rest @ ..] => parts.push(format!("running {first} and {} more", rest.len())),
+        }
+        if !self.queued.is_empty() {
+            parts.push(format!("{} queued", self.queued.len()));
+        }
+        if self.failed > 0 {
+            parts.push(format!("{} failed", self.failed));
+        }
+        parts.join("; ")
     }
 }
 
-/// Labels of the runs in flight, kept by the caller from Started/Finished events.
-pub fn track(running: &mut Vec<String>, event: &Event<'_>) {
-    match event {
-        Event::Started(spec) => running.push(RunSpec::label(spec)),
-        Event::Finished(outcome) => {
-            let label = outcome.spec.label();
-            running.retain(|l| *l != label);
-        }
-        Event::Added(_) => {}
-    }
+/// Removes `label` from `list`; whether it was there.
+fn remove(list: &mut Vec<String>, label: &str) -> bool {
+    let before = list.len();
+    list.retain(|l| l != label);
+    list.len() != before
 }

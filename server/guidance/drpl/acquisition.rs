@@ -6,13 +6,14 @@ use serde::{Deserialize, Serialize};
 
 use super::belief::{Belief, Response};
 
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Acquisition {
     /// Uniformly among the candidates \[paper\].
     #[default]
     Uniform,
     /// The candidate with the highest mutual information with the belief \[aprel\].
+    #[serde(alias = "mutual-information")]
     MutualInformation,
 }
 

@@ -5,10 +5,11 @@
 //! the env's shaping one valid theta (Lunar Lander's features mirror Gymnasium's shaping and fuel
 //! costs term by term).
 
+use super::trajectories::TrajectoryStep;
 use crate::scene_graph::lunar_lander::SIDE_ENGINE_THRESHOLD;
-use crate::sim::Task;
 use crate::sim::placing::over_opening;
 use crate::sim::reaching::{TABLE_HALF_X, TABLE_HALF_Y, in_goal};
+use crate::sim::{Task, TaskRef};
 
 pub const LUNAR_LANDER: [&str; 6] = [
     "neg_distance_to_pad",
@@ -44,6 +45,32 @@ pub fn names(task: Task) -> &'static [&'static str] {
 /// The number of features of a task, the belief's dimension.
 pub fn dim(task: Task) -> usize {
     names(task).len()
+}
+
+/// The number of features of any task: ours, or the names a declared task lists.
+pub fn dim_of(task: &TaskRef) -> usize {
+    match task {
+        TaskRef::Builtin(t) => dim(*t),
+        TaskRef::Declared(d) => d.features.len(),
+    }
+}
+
+/// The names of any task's features.
+pub fn names_of(task: &TaskRef) -> Vec<String> {
+    match task {
+        TaskRef::Builtin(t) => names(*t).iter().map(|n| n.to_string()).collect(),
+        TaskRef::Declared(d) => d.features.clone(),
+    }
+}
+
+/// phi of a recorded step: ours computed here; a declared task's as its env reported them, or
+/// (when it declares none) the observation after the step.
+pub fn of_step(task: &TaskRef, step: &TrajectoryStep) -> Vec<f64> {
+    match task {
+        TaskRef::Builtin(t) => phi(*t, &step.next_obs, &step.action),
+        TaskRef::Declared(d) if d.env_features => step.env_features.clone(),
+        TaskRef::Declared(_) => step.next_obs.iter().map(|&v| f64::from(v)).collect(),
+    }
 }
 
 /// phi(s_{t+1}, a_t): `next_obs` is the observation after `action` (in `[-1, 1]^n`).

@@ -1,6 +1,7 @@
 //! DRPL: preference learning over scene-graph segments (algorithms.md section 3). No IO.
 //!
 //! - `trajectories`: random-policy trajectories with the scene graph per step.
+//! - `trajectory_bytes`: recorded trajectories as bytes (kept by sessions on remote envs).
 //! - `features`: each task's reward features phi(s_{t+1}, a_t).
 //! - `segments`: cut where g changes, merge short runs, mean features, standardisation.
 //! - `pool`: the run's trajectories' features and segments; clips (one side of a query).
@@ -22,3 +23,4 @@ pub mod selection;
 pub mod state_pairs;
 pub mod trainer;
 pub mod trajectories;
+pub mod trajectory_bytes;

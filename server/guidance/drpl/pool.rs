@@ -9,7 +9,7 @@ use super::features;
 use super::segments::{self, Segment, Standardizer};
 use super::trajectories::Trajectory;
 use crate::scene_graph::AbstractState;
-use crate::sim::Task;
+use crate::sim::TaskRef;
 
 /// One trajectory as the pool needs it: g_t and phi(s_{t+1}, a_t) per step.
 #[derive(Clone, Debug, PartialEq)]
@@ -86,19 +86,15 @@ impl QueryPool {
     }
 
     /// The pool of `task`'s recorded trajectories, with phi from `features`.
-    pub fn from_trajectories(task: Task, trajectories: &[Trajectory], min_run: usize) -> Self {
+    pub fn from_trajectories(task: &TaskRef, trajectories: &[Trajectory], min_run: usize) -> Self {
         let feats = trajectories
             .iter()
             .map(|t| TrajectoryFeatures {
                 states: t.steps.iter().map(|s| s.abstract_state).collect(),
-                phis: t
-                    .steps
-                    .iter()
-                    .map(|s| features::phi(task, &s.next_obs, &s.action))
-                    .collect(),
+                phis: t.steps.iter().map(|s| features::of_step(task, s)).collect(),
             })
             .collect();
-        Self::new(features::dim(task), feats, min_run)
+        Self::new(features::dim_of(task), feats, min_run)
     }
 
     pub fn dim(&self) -> usize {

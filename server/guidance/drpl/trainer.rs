@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::pool::Clip;
 
 /// A trainer's answer to "which of the two is better?".
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Preference {
     Left,

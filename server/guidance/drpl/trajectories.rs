@@ -6,7 +6,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::scene_graph::{AbstractState, SceneGraph};
-use crate::sim::{EnvOptions, Task};
+use crate::sim::{Env, EnvFault, EnvOptions, Task};
 
 /// Trajectories per run when not overridden.
 pub const DEFAULT_TRAJECTORIES: usize = 100;
@@ -27,6 +27,9 @@ pub struct TrajectoryStep {
     pub action: Vec<f32>,
     pub next_obs: Vec<f32>,
     pub abstract_state: AbstractState,
+    /// The features phi the env computed for this step (an env in another process that
+    /// declares features); empty when they are computed from the task.
+    pub env_features: Vec<f64>,
 }
 
 /// One recorded episode (cut at the step limit or where the env ended it).
@@ -58,30 +61,48 @@ pub fn collect(
     rng: &mut ChaCha8Rng,
 ) -> Vec<Trajectory> {
     let mut env = task.make_env_with(options);
+    collect_from(env.as_mut(), graph, count, max_steps, rng, &mut |_| {})
+        .expect("the built-in tasks never fail")
+}
+
+/// [`collect`] on a given env (one in another process), telling `progress` how many
+/// trajectories are done after each: recording a remote env's trajectories takes as long as
+/// its steps do.
+pub fn collect_from(
+    env: &mut dyn Env,
+    graph: &SceneGraph,
+    count: usize,
+    max_steps: usize,
+    rng: &mut ChaCha8Rng,
+    progress: &mut dyn FnMut(usize),
+) -> Result<Vec<Trajectory>, EnvFault> {
     let act_dim = env.spec().action_space.dim();
-    (0..count)
-        .map(|_| {
-            let reset_seed: u64 = rng.random();
-            let mut obs = env.reset(reset_seed);
-            let mut steps = Vec::new();
-            while steps.len() < max_steps {
-                let action: Vec<f32> = (0..act_dim).map(|_| rng.random_range(-1.0..=1.0)).collect();
-                let step = env.step(&action);
-                let abstract_state = graph.evaluate(&step.obs, &action);
-                let done = step.done();
-                steps.push(TrajectoryStep {
-                    obs: std::mem::replace(&mut obs, step.obs.clone()),
-                    action,
-                    next_obs: step.obs,
-                    abstract_state,
-                });
-                if done {
-                    break;
-                }
+    let mut trajectories = Vec::with_capacity(count);
+    for done_so_far in 0..count {
+        let reset_seed: u64 = rng.random();
+        let mut obs = env.try_reset(reset_seed)?;
+        let mut steps = Vec::new();
+        while steps.len() < max_steps {
+            let action: Vec<f32> = (0..act_dim).map(|_| rng.random_range(-1.0..=1.0)).collect();
+            let step = env.try_step(&action)?;
+            let abstract_state = graph.after_step(env, &step.obs, &action);
+            let env_features = env.reported_features().map(<[f64]>::to_vec);
+            let done = step.done();
+            steps.push(TrajectoryStep {
+                obs: std::mem::replace(&mut obs, step.obs.clone()),
+                action,
+                next_obs: step.obs,
+                abstract_state,
+                env_features: env_features.unwrap_or_default(),
+            });
+            if done {
+                break;
             }
-            Trajectory { reset_seed, steps }
-        })
-        .collect()
+        }
+        trajectories.push(Trajectory { reset_seed, steps });
+        progress(done_so_far + 1);
+    }
+    Ok(trajectories)
 }
 
 /// A generator for `collect` from a run's seed, on its own ChaCha stream so that the

@@ -46,7 +46,7 @@ pub(crate) use dense::{DenseLayer, forward_layer, input_grad, weight_grad};
 pub use dualrep_kernels::Isa;
 
 /// Which kernels compute the networks' products.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum KernelPath {
     /// matrixmultiply's `sgemm`: the same bits on every machine, and as every earlier run.

@@ -1,5 +1,5 @@
 //! SAC's hyper-parameters, per task (`algorithms.md` section 1, from the authors' configs), and
-//! DREF's human critic (section 2), with `--set key=value` overrides.
+//! DREF's human critic (section 2). Overrides by name come through `crate::settings`.
 
 use serde::{Deserialize, Serialize};
 
@@ -53,7 +53,7 @@ impl Default for HumanCriticConfig {
 }
 
 /// How the actor loss combines the environment critic Q and the human critic H.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ActorMix {
     /// The authors' code (the published curves): head-wise
@@ -84,116 +84,5 @@ impl SacConfig {
             target_entropy: None,
             human_critic: Some(HumanCriticConfig::default()),
         }
-    }
-
-    /// One `--set key=value` override. `lambda`, `mix` and `human_critic_mask` switch the human
-    /// critic on (with defaults for the rest) if it was off.
-    pub fn set(&mut self, key: &str, value: &str) -> Result<(), String> {
-        let value = value.trim();
-        match key.trim() {
-            "hidden" => self.hidden = parse_hidden(value)?,
-            "learning_rate" => self.learning_rate = parse_positive(key, value)?,
-            "batch_size" => self.batch_size = parse_count(key, value)?,
-            "buffer_size" => self.buffer_size = parse_count(key, value)?,
-            "tau" => {
-                let tau = parse_f32(key, value)?;
-                if !(0.0..=1.0).contains(&tau) {
-                    return Err(format!("tau must lie in [0, 1], got {value}"));
-                }
-                self.tau = tau;
-            }
-            "gamma" => {
-                let gamma = parse_f32(key, value)?;
-                if !(0.0..=1.0).contains(&gamma) {
-                    return Err(format!("gamma must lie in [0, 1], got {value}"));
-                }
-                self.gamma = gamma;
-            }
-            "learning_starts" => self.learning_starts = parse_usize(key, value)?,
-            "gradient_steps" => self.gradient_steps = parse_usize(key, value)?,
-            "init_ent_coef" => self.init_ent_coef = parse_positive(key, value)?,
-            "target_entropy" => {
-                self.target_entropy = match value {
-                    "auto" | "none" => None,
-                    _ => Some(parse_f32(key, value)?),
-                }
-            }
-            "human_critic" => {
-                self.human_critic = match parse_bool(key, value)? {
-                    true => Some(self.human_critic.clone().unwrap_or_default()),
-                    false => None,
-                }
-            }
-            "lambda" => {
-                let lambda = parse_f32(key, value)?;
-                if lambda < 0.0 {
-                    return Err(format!("lambda must be >= 0, got {value}"));
-                }
-                self.human_critic.get_or_insert_default().lambda = lambda;
-            }
-            "mix" => {
-                self.human_critic.get_or_insert_default().mix = match value {
-                    "authors" => ActorMix::Authors,
-                    "paper" => ActorMix::Paper,
-                    _ => return Err(format!("mix must be authors or paper, got {value:?}")),
-                }
-            }
-            "human_critic_mask" => {
-                self.human_critic.get_or_insert_default().mask = parse_bool(key, value)?;
-            }
-            other => {
-                return Err(format!(
-                    "unknown SAC setting {other:?}; known: hidden, learning_rate, batch_size, \
-                     buffer_size, tau, gamma, learning_starts, gradient_steps, init_ent_coef, \
-                     target_entropy, human_critic, lambda, mix, human_critic_mask"
-                ));
-            }
-        }
-        Ok(())
-    }
-}
-
-fn parse_f32(key: &str, value: &str) -> Result<f32, String> {
-    match value.parse::<f32>() {
-        Ok(v) if v.is_finite() => Ok(v),
-        _ => Err(format!("{key} must be a finite number, got {value:?}")),
-    }
-}
-
-fn parse_positive(key: &str, value: &str) -> Result<f32, String> {
-    match parse_f32(key, value)? {
-        v if v > 0.0 => Ok(v),
-        _ => Err(format!("{key} must be > 0, got {value}")),
-    }
-}
-
-fn parse_usize(key: &str, value: &str) -> Result<usize, String> {
-    value
-        .parse::<usize>()
-        .map_err(|_| format!("{key} must be a whole number >= 0, got {value:?}"))
-}
-
-fn parse_count(key: &str, value: &str) -> Result<usize, String> {
-    match parse_usize(key, value)? {
-        0 => Err(format!("{key} must be at least 1")),
-        n => Ok(n),
-    }
-}
-
-fn parse_bool(key: &str, value: &str) -> Result<bool, String> {
-    match value {
-        "true" => Ok(true),
-        "false" => Ok(false),
-        _ => Err(format!("{key} must be true or false, got {value:?}")),
-    }
-}
-
-fn parse_hidden(value: &str) -> Result<Vec<usize>, String> {
-    let sizes: Result<Vec<usize>, _> = value.split(',').map(|s| s.trim().parse()).collect();
-    match sizes {
-        Ok(sizes) if sizes.iter().all(|&n| n > 0) => Ok(sizes),
-        _ => Err(format!(
-            "hidden must be comma-separated positive layer sizes such as 256,256, got {value:?}"
-        )),
     }
 }

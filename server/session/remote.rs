@@ -1,0 +1,160 @@
+//! A session on an environment in another process or on another machine. Such an env cannot
+//! be replayed from step 0 (a robot, or any env whose episodes do not repeat), so the session
+//! does not resume by replaying its stored answers as a simulated one does:
+//!
+//! - an evaluative session saves its whole run (learner, replay buffer, query-rule state,
+//!   random streams; `guidance::run_checkpoint`) at episode starts and resumes from the latest
+//!   one. Queries asked after that checkpoint keep their stored answers and numbers, but the
+//!   run forgot them with the episode the env lost: new queries are numbered after every stored
+//!   one, so nobody is ever asked an answered query again, and [`QueryNumbering`] maps the
+//!   session's query numbers to the run's.
+//! - a preference session keeps the trajectories it recorded on the env, and resumes by
+//!   replaying its stored answers over them (no env step is replayed).
+
+use serde::{Deserialize, Serialize};
+
+use crate::remote_env::RemoteDescription;
+use crate::sim::{Env, EnvFault};
+
+/// Opens another connection to the session's env (clips of human preference sessions are
+/// replayed on one).
+pub type Reconnect = Box<dyn Fn() -> Result<Box<dyn Env>, EnvFault> + Send>;
+
+/// The env a session runs on when it is not our simulator, connected by the caller (the hub's
+/// session thread), with what the session resumes from.
+pub struct RemoteSession {
+    pub env: Box<dyn Env>,
+    pub description: RemoteDescription,
+    pub reconnect: Reconnect,
+    /// The bytes of the latest `Checkpoint::resume` the session reported, if any.
+    pub resume_from: Option<Vec<u8>>,
+    /// Queries stored for the session so far (answered or not): new ones are numbered after.
+    pub stored_queries: u64,
+}
+
+/// Which of the session's query numbers the run knows, and under which of its own: numbers
+/// whose transitions the run lost with an env fault or a shutdown mid-episode are skipped.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct QueryNumbering {
+    /// Session query numbers the run does not have, as `[start, end)` ranges in order.
+    pub lost: Vec<(u64, u64)>,
+    /// The next session query number.
+    pub next: u64,
+}
+
+impl QueryNumbering {
+    /// The numbering after a resume from a checkpoint whose notes had `saved` (none: the run
+    /// starts from step 0), with `stored_queries` queries in the store.
+    pub fn resumed(saved: Option<QueryNumbering>, stored_queries: u64) -> Self {
+        let mut n = saved.unwrap_or_default();
+        if stored_queries > n.next {
+            n.lost.push((n.next, stored_queries));
+            n.next = stored_queries;
+        }
+        n
+    }
+
+    /// The run's query index of session query `seq` (`None`: the run lost it).
+    pub fn run_query(&self, seq: u64) -> Option<usize> {
+        let mut skipped = 0;
+        for &(start, end) in &self.lost {
+            if seq < start {
+                break;
+            }
+            if seq < end {
+                return None;
+            }
+            skipped += end - start;
+        }
+        Some((seq - skipped) as usize)
+    }
+}
+
+/// What an evaluative run checkpoint of a remote session keeps besides the run.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct ResumeNotes {
+    pub numbering: QueryNumbering,
+    /// Episodes finished (the session's episode counter, for frames and the recording).
+    pub episode: u64,
+}
+
+/// When a remote evaluative session saves its run: at the first episode start after every
+/// `every` steps, and (people answering) after any episode in which someone answered, so that
+/// an env lost mid-episode costs at most that episode's answers.
+pub struct CheckpointRule {
+    every: u64,
+    next_at: u64,
+    human: bool,
+    answered_since: bool,
+}
+
+impl CheckpointRule {
+    pub fn new(every: u64, steps: u64, human: bool) -> Self {
+        Self {
+            every,
+            next_at: (steps / every + 1) * every,
+            human,
+            answered_since: false,
+        }
+    }
+
+    /// A person answered a query.
+    pub fn answered(&mut self) {
+        self.answered_since = true;
+    }
+
+    /// Whether to save now, at an episode start after `steps` steps.
+    pub fn due(&mut self, steps: u64) -> bool {
+        let due = steps >= self.next_at || (self.human && self.answered_since);
+        if due {
+            self.next_at = (steps / self.every + 1) * self.every;
+            self.answered_since = false;
+        }
+        due
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lost_queries_are_skipped_and_the_rest_map_to_the_run() {
+        // The run checkpointed after query 4; queries 5..8 were answered and lost.
+        let n = QueryNumbering::resumed(
+            Some(QueryNumbering {
+                lost: vec![],
+                next: 5,
+            }),
+            8,
+        );
+        assert_eq!(n.next, 8);
+        assert_eq!(n.run_query(4), Some(4));
+        assert_eq!(n.run_query(6), None);
+        assert_eq!(n.run_query(8), Some(5));
+        // A second loss later: 10..12.
+        let n = QueryNumbering::resumed(Some(QueryNumbering { next: 10, ..n }), 12);
+        assert_eq!(n.lost, vec![(5, 8), (10, 12)]);
+        assert_eq!(n.run_query(9), Some(6));
+        assert_eq!(n.run_query(11), None);
+        assert_eq!(n.run_query(12), Some(7));
+        // No checkpoint yet: everything stored is lost; nothing stored, nothing lost.
+        assert_eq!(QueryNumbering::resumed(None, 3).lost, vec![(0, 3)]);
+        assert_eq!(QueryNumbering::resumed(None, 0), QueryNumbering::default());
+    }
+
+    #[test]
+    fn checkpoints_come_every_n_steps_and_after_answered_episodes() {
+        let mut rule = CheckpointRule::new(100, 0, true);
+        assert!(!rule.due(40));
+        rule.answered();
+        assert!(rule.due(60));
+        assert!(!rule.due(90));
+        assert!(rule.due(130));
+        assert!(!rule.due(150));
+        let mut synthetic = CheckpointRule::new(100, 250, false);
+        synthetic.answered();
+        assert!(!synthetic.due(280));
+        assert!(synthetic.due(300));
+    }
+}

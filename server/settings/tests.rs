@@ -1,0 +1,244 @@
+use serde_json::json;
+
+use super::*;
+
+fn dref(task: Task, settings: &Settings) -> Result<EvaluativeRunConfig, String> {
+    settings.evaluative(task, EvaluativeMethod::Dref, 0)
+}
+
+#[test]
+fn pairs_read_json_where_it_is_json_and_text_elsewhere() {
+    let s = Settings::from_pairs([
+        ("hidden", "256,256"),
+        ("c", "0.3"),
+        ("ucb", "paper"),
+        ("human_critic_mask", "true"),
+        ("target_entropy", "auto"),
+        ("k", "7"),
+    ])
+    .unwrap();
+    assert_eq!(s.hidden, Some(vec![256, 256]));
+    assert_eq!(s.c, Some(0.3));
+    assert_eq!(s.ucb, Some(UcbForm::Paper));
+    assert_eq!(s.human_critic_mask, Some(true));
+    assert_eq!(s.target_entropy, Some(TargetEntropy::Auto(AutoWord::Auto)));
+    assert_eq!(s.k, Some(7));
+    let s = Settings::from_pairs([("target_entropy", "-2"), ("hidden", "[32, 32]")]).unwrap();
+    assert_eq!(s.target_entropy, Some(TargetEntropy::Value(-2.0)));
+    assert_eq!(s.hidden, Some(vec![32, 32]));
+    // A later pair wins.
+    let s = Settings::from_pairs([("c", "0.1"), ("c", "0.2")]).unwrap();
+    assert_eq!(s.c, Some(0.2));
+}
+
+#[test]
+fn unknown_keys_and_wrong_types_are_refused_by_name() {
+    let e = Settings::from_pairs([("no_such_key", "1")]).unwrap_err();
+    assert!(e.contains("no_such_key") && e.contains("pace_hz"), "{e}");
+    let e = Settings::from_json(json!({"pace_hz": "fast"})).unwrap_err();
+    assert!(e.contains("invalid type"), "{e}");
+    assert!(Settings::from_pairs([("hidden", "64,x")]).is_err());
+    assert!(Settings::from_pairs([("k", "-1")]).is_err());
+    assert!(Settings::from_pairs([("ucb", "best")]).is_err());
+    assert!(Settings::from_json(json!({"trajectories": {"a": 1}})).is_err());
+    assert!(Settings::from_json(json!({"variant": "robosuite"})).is_err());
+}
+
+#[test]
+fn evaluative_settings_reach_the_run() {
+    let s = Settings::from_json(json!({
+        "hidden": [32, 32], "c": 0.5, "k": 7, "ucb": "paper", "batch_size": 64,
+        "lambda": 2.0, "mix": "paper", "reward_scale": 0.1, "variant": "uniform",
+        "release_at": 0.9, "observe_grip": "level", "success": "through"
+    }))
+    .unwrap();
+    let c = dref(Task::Placing, &s).unwrap();
+    assert_eq!(c.sac.hidden, vec![32, 32]);
+    assert_eq!((c.query_rule.c, c.query_rule.k), (0.5, 7));
+    assert_eq!(c.query_rule.form, UcbForm::Paper);
+    assert_eq!(c.sac.batch_size, 64);
+    let critic = c.sac.human_critic.unwrap();
+    assert_eq!((critic.lambda, critic.mix), (2.0, ActorMix::Paper));
+    assert_eq!(c.reward_scale, 0.1);
+    assert_eq!(c.env.variant, Variant::Uniform);
+    assert_eq!(c.env.release_at, 0.9);
+    assert_eq!(c.env.observe_grip, GripObservation::Level);
+    assert_eq!(c.env.placing_success(), PlacingSuccess::Through);
+}
+
+#[test]
+fn settings_of_other_tasks_and_methods_are_refused() {
+    let one = |v: serde_json::Value| Settings::from_json(v).unwrap();
+    let e = dref(Task::Reaching, &one(json!({"trajectories": 10}))).unwrap_err();
+    assert!(e.contains("preference"), "{e}");
+    assert!(dref(Task::Reaching, &one(json!({"side_engines_on_a0": true}))).is_err());
+    assert!(dref(Task::LunarLander, &one(json!({"side_engines_on_a0": true}))).is_ok());
+    assert!(dref(Task::Reaching, &one(json!({"release_at": 0.9}))).is_err());
+    assert!(dref(Task::LunarLander, &one(json!({"variant": "uniform"}))).is_err());
+    let e = one(json!({"c": 0.3}))
+        .preference(Task::Reaching, QueryMethod::Drpl, 0)
+        .unwrap_err();
+    assert!(e.contains("evaluative"), "{e}");
+    assert!(
+        one(json!({"release_at": 0.9}))
+            .preference(Task::Reaching, QueryMethod::Drpl, 0)
+            .is_err()
+    );
+}
+
+#[test]
+fn values_out_of_range_are_refused() {
+    for bad in [
+        json!({"tau": 1.5}),
+        json!({"gamma": -0.1}),
+        json!({"batch_size": 0}),
+        json!({"lambda": -1}),
+        json!({"learning_rate": 0}),
+        json!({"hidden": []}),
+        json!({"hidden": [64, 0]}),
+        json!({"release_at": 1.5}),
+        json!({"reward_scale": -1}),
+        json!({"c": -0.1}),
+    ] {
+        let s = Settings::from_json(bad.clone()).unwrap();
+        assert!(dref(Task::Placing, &s).is_err(), "{bad}");
+    }
+    for bad in [
+        json!({"trajectories": 1}),
+        json!({"samples": 0}),
+        json!({"thinning": 0}),
+    ] {
+        let s = Settings::from_json(bad.clone()).unwrap();
+        assert!(
+            s.preference(Task::Placing, QueryMethod::Drpl, 0).is_err(),
+            "{bad}"
+        );
+    }
+}
+
+#[test]
+fn the_human_critic_switches_with_its_settings() {
+    let sac = |v: serde_json::Value| {
+        Settings::from_json(v)
+            .unwrap()
+            .evaluative(Task::Reaching, EvaluativeMethod::Sac, 0)
+            .unwrap()
+            .sac
+            .human_critic
+    };
+    assert!(sac(json!({})).is_none());
+    assert!(sac(json!({"lambda": 3})).is_some());
+    assert!(sac(json!({"human_critic": true})).is_some());
+    let off = Settings::from_json(json!({"human_critic": false}))
+        .unwrap()
+        .evaluative(Task::Reaching, EvaluativeMethod::Dref, 0)
+        .unwrap();
+    assert!(off.sac.human_critic.is_none());
+}
+
+#[test]
+fn preference_settings_reach_the_run() {
+    let s = Settings::from_json(json!({
+        "trajectories": 10, "max_steps": 50, "min_run": 2, "acquisition": "mutual_information",
+        "beta": 2.0, "samples": 50, "variant": "uniform"
+    }))
+    .unwrap();
+    let c = s.preference(Task::Placing, QueryMethod::DrplSs, 3).unwrap();
+    assert_eq!((c.trajectories, c.max_steps, c.min_run), (10, 50, 2));
+    assert_eq!(c.acquisition, Acquisition::MutualInformation);
+    assert_eq!((c.belief.beta, c.belief.samples), (2.0, 50));
+    assert_eq!(c.env.variant, Variant::Uniform);
+    assert_eq!(c.seed, 3);
+}
+
+#[test]
+fn session_settings_default_and_validate() {
+    let none = Settings::default().session().unwrap();
+    assert_eq!(none.pace_hz, DEFAULT_PACE_HZ);
+    assert_eq!(none.answer_timeout_s, DEFAULT_ANSWER_TIMEOUT_S);
+    assert!(none.record);
+    let s = Settings::from_json(json!({"pace_hz": 5, "answer_timeout_s": 2.5, "record": false}))
+        .unwrap();
+    let session = s.session().unwrap();
+    assert_eq!((session.pace_hz, session.answer_timeout_s), (5.0, 2.5));
+    assert!(!session.record);
+    // Session settings are not the algorithm's: the run builds without them.
+    dref(Task::Reaching, &s).unwrap();
+    assert_eq!(
+        s.session_keys_set(),
+        vec!["pace_hz", "answer_timeout_s", "record"]
+    );
+    for bad in [
+        json!({"pace_hz": -1}),
+        json!({"pace_hz": 5000}),
+        json!({"answer_timeout_s": 0}),
+        json!({"clip_frames": 0}),
+        json!({"rerun_connect": ""}),
+    ] {
+        assert!(
+            Settings::from_json(bad.clone()).unwrap().session().is_err(),
+            "{bad}"
+        );
+    }
+    assert!(Settings::from_json(json!({"record": "no"})).is_err());
+}
+
+#[test]
+fn the_offered_defaults_are_the_runs_defaults_and_apply_cleanly() {
+    // What GET /api/tasks offers for a task, sent back unchanged, builds the default run.
+    for task in [Task::Reaching, Task::Placing, Task::LunarLander] {
+        let offered = Settings::defaults(task, Family::Evaluative);
+        let round_trip = Settings::from_json(serde_json::to_value(&offered).unwrap()).unwrap();
+        assert_eq!(round_trip, offered);
+        // `start` and `success` are offered as the variant's own, which the default leaves
+        // implicit.
+        let mut expected = EvaluativeRunConfig::new(task, EvaluativeMethod::Dref, 0);
+        if task != Task::LunarLander {
+            expected.env.start = Some(expected.env.start_pose());
+        }
+        if task == Task::Placing {
+            expected.env.success = Some(expected.env.placing_success());
+        }
+        assert_eq!(dref(task, &offered).unwrap(), expected, "{task}");
+        offered.session().unwrap();
+        let offered = Settings::defaults(task, Family::Preference);
+        let mut expected = PreferenceRunConfig::new(task, QueryMethod::Drpl, 0);
+        if task == Task::Placing {
+            expected.env.success = Some(expected.env.placing_success());
+        }
+        assert_eq!(
+            offered.preference(task, QueryMethod::Drpl, 0).unwrap(),
+            expected,
+            "{task}"
+        );
+        // The task versions are Reaching's and Placing's only.
+        assert_eq!(offered.variant.is_some(), task != Task::LunarLander);
+        assert_eq!(offered.release_at.is_some(), task == Task::Placing);
+        assert_eq!(
+            offered.side_engines_on_a0.is_some(),
+            task == Task::LunarLander
+        );
+    }
+}
+
+#[test]
+fn merged_settings_take_the_later_value() {
+    let file = Settings::from_json(json!({"c": 0.1, "k": 3})).unwrap();
+    let flags = Settings::from_pairs([("c", "0.2")]).unwrap();
+    let s = file.merged(flags).unwrap();
+    assert_eq!((s.c, s.k), (Some(0.2), Some(3)));
+}
+
+#[test]
+fn kernels_are_a_session_setting_and_nonsense_is_refused() {
+    let s = Settings::from_json(json!({"kernels": "portable"})).unwrap();
+    assert_eq!(s.session().unwrap().kernels, Some(KernelPath::Portable));
+    assert_eq!(s.session_keys_set(), vec!["kernels"]);
+    // Not the algorithm's: the run builds with it set.
+    dref(Task::Reaching, &s).unwrap();
+    assert_eq!(Settings::default().session().unwrap().kernels, None);
+    for bad in [json!({"kernels": "fast"}), json!({"kernels": 2})] {
+        let err = Settings::from_json(bad.clone()).unwrap_err();
+        assert!(err.contains("kernels"), "{bad}: {err}");
+    }
+}
