@@ -1,6 +1,7 @@
 """PyTorch's speed at the update `dualrep bench sac` times: DREF's SAC gradient step (twin
 critics, twin human critics with the authors' mix, automatic temperature, Polyak), in
-stable-baselines3's order, on one CPU thread, on batches drawn from random transitions.
+stable-baselines3's order, on one CPU thread unless `--threads`, on batches drawn from random
+transitions.
 
     pip install torch==2.15.0   # CPU is enough
     python3 benches/reference/torch_sac_update.py                      # Lunar Lander's sizes
@@ -41,8 +42,9 @@ def main():
     parser.add_argument("--hidden", default="400,300")
     parser.add_argument("--batch", type=int, default=512)
     parser.add_argument("--seconds", type=float, default=5.0)
+    parser.add_argument("--threads", type=int, default=1)
     args = parser.parse_args()
-    torch.set_num_threads(1)
+    torch.set_num_threads(args.threads)
     torch.manual_seed(0)
     obs_dim, act_dim, batch = args.obs, args.act, args.batch
     hidden = [int(h) for h in args.hidden.split(",")]

@@ -116,7 +116,8 @@ struct SacBench {
     mflop_per_update: f64,
     /// At the median rate.
     gflops: f64,
-    /// The FMA loop on `threads` threads at the kernels' vector width (AVX2's for portable).
+    /// The FMA loop on `threads` threads at the kernels' vector width (for portable, the widest
+    /// this CPU has, which matrixmultiply uses).
     fma_peak_gflops: f64,
     fraction_of_fma_peak: f64,
     /// matrixmultiply's `sgemm` at 256^3 on one thread.

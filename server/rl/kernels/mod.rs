@@ -91,12 +91,12 @@ impl KernelPath {
     }
 
     /// GFLOP/s of `threads` threads running a register-only FMA loop at this path's vector
-    /// width (AVX2's for the portable path, which has no FMA of its own; 0 without AVX2).
+    /// width. The portable path's is the widest this CPU has: matrixmultiply picks its own
+    /// AVX-512 sgemm kernel where the CPU has AVX-512F (else its FMA one), so its ceiling is
+    /// that width's (0 without AVX2).
     pub fn fma_peak_gflops(self, threads: usize, budget: std::time::Duration) -> f64 {
-        match self
-            .isa()
-            .or(KernelPath::Avx2.is_available().then_some(Isa::Avx2))
-        {
+        let portable = KernelPath::best_available().isa();
+        match self.isa().or(portable) {
             Some(isa) => dualrep_kernels::fma_peak::fma_peak_gflops(isa, threads, budget),
             None => 0.0,
         }
