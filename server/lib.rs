@@ -16,7 +16,9 @@
 //!   `AbstractState` bit vector.
 //! - [`rl`]: MLPs on nalgebra with a hand-written backward pass, Adam, losses, the
 //!   tanh-squashed Gaussian policy, the replay buffer, and SAC with DREF's twin human critic
-//!   (checkpoints as safetensors bytes).
+//!   (checkpoints as safetensors bytes). `rl::kernels` computes every layer's products: on the
+//!   portable path (matrixmultiply) or on the AVX-512 / AVX2 kernels of the `dualrep-kernels`
+//!   crate (`kernels/`), chosen at run time, on one or more threads.
 //! - [`guidance`]: when to ask (DREF's UCB query rule, EF-p%), who answers (the
 //!   `EvaluativeTrainer` trait, the expert oracle), the evaluative training loop; later, what
 //!   to ask (DRPL).

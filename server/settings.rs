@@ -16,6 +16,7 @@ use crate::guidance::drpl::selection::QueryMethod;
 use crate::guidance::evaluative_run::EvaluativeRunConfig;
 use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::guidance::query_rule::UcbForm;
+use crate::rl::kernels::KernelPath;
 use crate::rl::{ActorMix, HumanCriticConfig, SacConfig};
 use crate::scene_graph::SceneGraph;
 use crate::sim::{EnvOptions, GripObservation, PlacingSuccess, Start, Task, TaskRef, Variant};
@@ -82,6 +83,10 @@ pub struct Settings {
     /// Seconds a remote env (`env: {"url": ...}`) may take to answer one request [default 30].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub env_timeout_s: Option<f64>,
+    /// The kernels the session's networks compute with: `portable`, `avx2` or `avx512` [default
+    /// the server's, recorded at launch so that a resume replays with the same numerics].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kernels: Option<KernelPath>,
 
     // ---- SAC (algorithms.md section 1) ---------------------------------------------------
     /// Hidden layer sizes of the actor and every critic, e.g. `[256, 256]` or `"256,256"`.
@@ -229,6 +234,9 @@ pub struct SessionSettings {
     pub rerun_connect: Option<String>,
     /// Seconds a remote env may take to answer one request.
     pub env_timeout_s: f64,
+    /// The kernels the session computes with; `None` for sessions stored before they were
+    /// recorded (the server's then).
+    pub kernels: Option<KernelPath>,
 }
 
 impl Settings {
@@ -313,6 +321,7 @@ impl Settings {
             record: self.record.unwrap_or(true),
             rerun_connect: self.rerun_connect.clone(),
             env_timeout_s: positive("env_timeout_s", self.env_timeout_s, DEFAULT_ENV_TIMEOUT_S)?,
+            kernels: self.kernels,
         })
     }
 
@@ -326,6 +335,7 @@ impl Settings {
             record,
             rerun_connect,
             env_timeout_s,
+            kernels,
             ..
         } = self;
         [
@@ -336,6 +346,7 @@ impl Settings {
             ("record", record.is_some()),
             ("rerun_connect", rerun_connect.is_some()),
             ("env_timeout_s", env_timeout_s.is_some()),
+            ("kernels", kernels.is_some()),
         ]
         .into_iter()
         .filter(|(_, set)| *set)
@@ -371,6 +382,7 @@ impl Settings {
             record: _,
             rerun_connect: _,
             env_timeout_s: _,
+            kernels: _,
             hidden,
             learning_rate,
             batch_size,
@@ -521,6 +533,7 @@ impl Settings {
             record: _,
             rerun_connect: _,
             env_timeout_s: _,
+            kernels: _,
             hidden,
             learning_rate,
             batch_size,

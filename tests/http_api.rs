@@ -518,6 +518,9 @@ async fn a_session_launched_with_record_false_runs_and_writes_no_recording() {
     let s = settled(&router, &id).await;
     assert_eq!(s["status"], "finished", "{s}");
     assert_eq!(s["params"]["record"], false, "{s}");
+    // The kernels it computed with are recorded at launch, for a resume to replay with.
+    let kernels = s["params"]["kernels"].as_str().unwrap_or_default();
+    assert!(["portable", "avx2", "avx512"].contains(&kernels), "{s}");
     assert!(
         !dir.path()
             .join("recordings")

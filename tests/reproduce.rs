@@ -296,3 +296,44 @@ fn reproduce_rejects_bad_arguments_before_running_anything() {
     assert!(!g.out.exists(), "nothing ran, nothing written");
     assert!(!g.log.exists());
 }
+
+#[test]
+fn each_run_gets_the_cores_divided_by_the_jobs_and_the_parents_kernels() {
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
+    for (jobs, extra, threads) in [
+        ("2", None, (cores / 2).clamp(1, 2)),
+        ("1", None, cores.clamp(1, 2)),
+        ("2", Some("--threads=3"), 3),
+    ] {
+        let g = grid();
+        let mut args = vec![
+            "fig3",
+            "--tasks",
+            "reaching",
+            "--seeds",
+            "1",
+            "--methods",
+            "sac",
+            "--jobs",
+            jobs,
+            "--kernels",
+            "portable",
+        ];
+        args.extend(extra);
+        let out = reproduce(&g.out, &g.log, None, &args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let env = fs::read_to_string(g.out.join("reaching/sac/seed0/env.txt")).unwrap();
+        assert_eq!(
+            env.trim(),
+            format!("threads={threads} kernels=portable"),
+            "--jobs {jobs} {extra:?}"
+        );
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            stdout.contains(&format!(
+                "each on {threads} thread(s) with the portable kernels"
+            )),
+            "{stdout}"
+        );
+    }
+}

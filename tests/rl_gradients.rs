@@ -3,6 +3,7 @@
 
 // Inside `mod rl` so that `cargo test rl` selects these tests with the unit tests of `dualrep::rl`.
 mod rl {
+    use dualrep::rl::kernels;
     use dualrep::rl::{Adam, AdamConfig, Mlp, MlpWorkspace, mse_loss};
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
@@ -159,36 +160,46 @@ mod rl {
 
     #[test]
     fn weight_and_bias_gradients_match_central_differences() {
-        for (seed, &(n_in, hidden, n_out, batch)) in SHAPES.iter().enumerate() {
-            let mut problem = Problem::new(n_in, hidden, n_out, batch, seed as u64);
-            let (grads, _) = problem.analytic();
-            let (numeric, _) = problem.numeric();
-            let name = format!("dL/dparams {n_in}->{hidden:?}->{n_out} x{batch}");
-            check(&name, &grads, &numeric, 2e-4);
-        }
+        kernels::on_every_path(|path| {
+            for (seed, &(n_in, hidden, n_out, batch)) in SHAPES.iter().enumerate() {
+                let mut problem = Problem::new(n_in, hidden, n_out, batch, seed as u64);
+                let (grads, _) = problem.analytic();
+                let (numeric, _) = problem.numeric();
+                let name = format!("{path}: dL/dparams {n_in}->{hidden:?}->{n_out} x{batch}");
+                check(&name, &grads, &numeric, 2e-4);
+            }
+        });
     }
 
     #[test]
     fn input_gradient_matches_central_differences() {
-        for (seed, &(n_in, hidden, n_out, batch)) in SHAPES.iter().enumerate() {
-            let mut problem = Problem::new(n_in, hidden, n_out, batch, seed as u64);
-            let (_, input_grad) = problem.analytic();
-            let (_, numeric) = problem.numeric();
-            let name = format!("dL/dinput {n_in}->{hidden:?}->{n_out} x{batch}");
-            check(&name, &input_grad, &numeric, 2e-4);
-        }
+        kernels::on_every_path(|path| {
+            for (seed, &(n_in, hidden, n_out, batch)) in SHAPES.iter().enumerate() {
+                let mut problem = Problem::new(n_in, hidden, n_out, batch, seed as u64);
+                let (_, input_grad) = problem.analytic();
+                let (_, numeric) = problem.numeric();
+                let name = format!("{path}: dL/dinput {n_in}->{hidden:?}->{n_out} x{batch}");
+                check(&name, &input_grad, &numeric, 2e-4);
+            }
+        });
     }
 
     #[test]
     fn backward_input_gives_the_same_input_gradient_and_leaves_parameters_alone() {
-        let mut problem = Problem::new(10, &[32, 24], 1, 16, 3);
-        let (_, input_grad) = problem.analytic();
-        problem.mlp.zero_grad();
-        // Same input, and the same output gradient as `analytic` left in the workspace.
-        problem.mlp.forward(&mut problem.ws);
-        problem.mlp.backward_input(&mut problem.ws);
-        assert_eq!(problem.ws.input_grad().as_slice(), &input_grad[..]);
-        assert!(problem.mlp.grads().iter().all(|&g| g == 0.0));
+        kernels::on_every_path(|path| {
+            let mut problem = Problem::new(10, &[32, 24], 1, 16, 3);
+            let (_, input_grad) = problem.analytic();
+            problem.mlp.zero_grad();
+            // Same input, and the same output gradient as `analytic` left in the workspace.
+            problem.mlp.forward(&mut problem.ws);
+            problem.mlp.backward_input(&mut problem.ws);
+            assert_eq!(
+                problem.ws.input_grad().as_slice(),
+                &input_grad[..],
+                "{path}"
+            );
+            assert!(problem.mlp.grads().iter().all(|&g| g == 0.0), "{path}");
+        });
     }
 
     #[test]
@@ -275,43 +286,67 @@ mod rl {
 
     #[test]
     fn forward_loss_and_gradients_agree_with_pytorch() {
-        let (mut mlp, mut ws, target) = torch_problem();
-        let loss = forward_backward(&mut mlp, &mut ws, &target);
-        assert_close("loss", &[loss], &[LOSS_0], 1e-6);
-        assert_close("output", ws.output().as_slice(), &OUTPUT_0, 1e-5);
-        assert_close("dL/dinput", ws.input_grad().as_slice(), &INPUT_GRAD_0, 1e-4);
-        let probe: Vec<f32> = PROBE.iter().map(|&i| mlp.grads()[i]).collect();
-        assert_close("dL/dparams (probe)", &probe, &GRAD_0_PROBE, 1e-4);
-        assert_close(
-            "dL/dparams (sum, sum of |.|)",
-            &sums(mlp.grads()),
-            &[GRAD_0_SUM, GRAD_0_ABS_SUM],
-            1e-4,
-        );
+        kernels::on_every_path(|path| {
+            let (mut mlp, mut ws, target) = torch_problem();
+            let loss = forward_backward(&mut mlp, &mut ws, &target);
+            assert_close(&format!("{path}: loss"), &[loss], &[LOSS_0], 1e-6);
+            assert_close(
+                &format!("{path}: output"),
+                ws.output().as_slice(),
+                &OUTPUT_0,
+                1e-5,
+            );
+            assert_close(
+                &format!("{path}: dL/dinput"),
+                ws.input_grad().as_slice(),
+                &INPUT_GRAD_0,
+                1e-4,
+            );
+            let probe: Vec<f32> = PROBE.iter().map(|&i| mlp.grads()[i]).collect();
+            assert_close(
+                &format!("{path}: dL/dparams (probe)"),
+                &probe,
+                &GRAD_0_PROBE,
+                1e-4,
+            );
+            assert_close(
+                &format!("{path}: dL/dparams (sum, sum of |.|)"),
+                &sums(mlp.grads()),
+                &[GRAD_0_SUM, GRAD_0_ABS_SUM],
+                1e-4,
+            );
+        });
     }
 
     #[test]
     fn two_adam_steps_agree_with_pytorch() {
-        let (mut mlp, mut ws, target) = torch_problem();
-        let mut adam = Adam::new(AdamConfig::with_lr(0.01), &[mlp.params().len()]);
-        forward_backward(&mut mlp, &mut ws, &target);
-        adam.step([mlp.params_and_grads()]);
-        let loss_1 = forward_backward(&mut mlp, &mut ws, &target);
-        adam.step([mlp.params_and_grads()]);
-        assert_close("loss after one step", &[loss_1], &[LOSS_1], 1e-6);
-        let probe: Vec<f32> = PROBE.iter().map(|&i| mlp.params()[i]).collect();
-        assert_close(
-            "params after two steps (probe)",
-            &probe,
-            &PARAMS_2_PROBE,
-            1e-5,
-        );
-        assert_close(
-            "params after two steps (sum, sum of |.|)",
-            &sums(mlp.params()),
-            &[PARAMS_2_SUM, PARAMS_2_ABS_SUM],
-            1e-5,
-        );
+        kernels::on_every_path(|path| {
+            let (mut mlp, mut ws, target) = torch_problem();
+            let mut adam = Adam::new(AdamConfig::with_lr(0.01), &[mlp.params().len()]);
+            forward_backward(&mut mlp, &mut ws, &target);
+            adam.step([mlp.params_and_grads()]);
+            let loss_1 = forward_backward(&mut mlp, &mut ws, &target);
+            adam.step([mlp.params_and_grads()]);
+            assert_close(
+                &format!("{path}: loss after one step"),
+                &[loss_1],
+                &[LOSS_1],
+                1e-6,
+            );
+            let probe: Vec<f32> = PROBE.iter().map(|&i| mlp.params()[i]).collect();
+            assert_close(
+                &format!("{path}: params after two steps (probe)"),
+                &probe,
+                &PARAMS_2_PROBE,
+                1e-5,
+            );
+            assert_close(
+                &format!("{path}: params after two steps (sum, sum of |.|)"),
+                &sums(mlp.params()),
+                &[PARAMS_2_SUM, PARAMS_2_ABS_SUM],
+                1e-5,
+            );
+        });
     }
 
     // ----------------------------------------------------------------------------------------

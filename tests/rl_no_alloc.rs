@@ -2,9 +2,12 @@
 //!
 //! The suite's counting global allocator (tests/main.rs) counts the allocations made during
 //! SAC-like update steps, per thread, so the tests running beside these do not disturb the
-//! count. Every matrix product goes to matrixmultiply's `sgemm`, which allocates (and frees) its packing buffer inside every call;
-//! that is the only allocation allowed: exactly one per product, and nothing still live after.
+//! count. On the portable kernel path every matrix product goes to matrixmultiply's `sgemm`,
+//! which allocates (and frees) its packing buffer inside every call; that is the only
+//! allocation allowed: exactly one per product, and nothing still live after. The fast paths
+//! pack into per-thread scratch that the first update grows: after it, nothing at all.
 
+use dualrep::rl::kernels::{self, KernelPath};
 use dualrep::rl::{Adam, AdamConfig, Mlp, MlpWorkspace, mse_loss};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -80,6 +83,12 @@ fn products(mlp: &Mlp, forwards: usize, param_backwards: usize, input_backwards:
 
 #[test]
 fn rl_training_step_allocates_only_sgemm_packing_buffers_after_warm_up() {
+    for path in KernelPath::ALL.into_iter().filter(|p| p.is_available()) {
+        kernels::with_path(path, || allocations_of_update_steps(path));
+    }
+}
+
+fn allocations_of_update_steps(path: KernelPath) {
     // A small network, and SAC's Reaching size at its batch.
     for (obs_dim, act_dim, hidden, batch) in [(3, 1, &[5, 4][..], 5), (8, 2, &[64, 64], 512)] {
         let mut sac = Sac::new(obs_dim, act_dim, hidden, batch);
@@ -88,11 +97,15 @@ fn rl_training_step_allocates_only_sgemm_packing_buffers_after_warm_up() {
         // actor: one forward, one parameter backward. Three layers each.
         let per_update = products(&sac.q, 2, 1, 1) + products(&sac.actor, 1, 1, 0);
         assert_eq!(per_update, (6 + 5 + 3) + (3 + 5));
+        let expected = match path {
+            KernelPath::Portable => per_update,
+            _ => 0,
+        };
         for step in 0..5 {
             let (allocations, live) = count(|| sac.update());
             assert_eq!(
-                allocations, per_update,
-                "{hidden:?} update {step}: allocations beyond sgemm's"
+                allocations, expected,
+                "{path} {hidden:?} update {step}: allocations beyond sgemm's"
             );
             assert_eq!(
                 live, 0,

@@ -64,9 +64,15 @@ fn an_expert_trains_and_drives_dref_and_ef_runs() {
             "final_mean_return",
             "wall_seconds",
             "updates_per_second",
+            "threads",
         ] {
             assert!(!written[field].is_null(), "{method}: {field} missing");
         }
+        let kernels = written["kernels"].as_str().unwrap_or_default();
+        assert!(
+            ["portable", "avx2", "avx512"].contains(&kernels),
+            "{method}: kernels {kernels:?}"
+        );
         let fraction = written["feedback_fraction"].as_f64().unwrap();
         match method {
             "ef-100" => assert_eq!(fraction, 1.0),

@@ -1,12 +1,15 @@
 """PyTorch's speed at the update `dualrep bench sac` times: DREF's SAC gradient step (twin
 critics, twin human critics with the authors' mix, automatic temperature, Polyak), in
-stable-baselines3's order, on one CPU thread, on batches drawn from random transitions.
+stable-baselines3's order, on one CPU thread unless `--threads`, on batches drawn from random
+transitions.
 
     pip install torch==2.15.0   # CPU is enough
     python3 benches/reference/torch_sac_update.py                      # Lunar Lander's sizes
     python3 benches/reference/torch_sac_update.py --hidden 256,256 --batch 256
 
-Prints one JSON object with `updates_per_second`. Sizes default to Lunar Lander's
+Prints one JSON object with `updates_per_second` (1 / the median time of an update, as `dualrep
+bench sac` reports it: robust to other processes on a shared machine) and
+`mean_updates_per_second`. Sizes default to Lunar Lander's
 (obs 8, act 2, hidden [400, 300], batch 512). Each update samples its batch by index from a
 replay of 100,000 random transitions, as the Rust benchmark does.
 """
@@ -14,6 +17,7 @@ replay of 100,000 random transitions, as the Rust benchmark does.
 import argparse
 import copy
 import json
+import statistics
 import time
 
 import torch
@@ -38,8 +42,9 @@ def main():
     parser.add_argument("--hidden", default="400,300")
     parser.add_argument("--batch", type=int, default=512)
     parser.add_argument("--seconds", type=float, default=5.0)
+    parser.add_argument("--threads", type=int, default=1)
     args = parser.parse_args()
-    torch.set_num_threads(1)
+    torch.set_num_threads(args.threads)
     torch.manual_seed(0)
     obs_dim, act_dim, batch = args.obs, args.act, args.batch
     hidden = [int(h) for h in args.hidden.split(",")]
@@ -122,11 +127,13 @@ def main():
 
     for _ in range(3):
         update()
-    start, count = time.perf_counter(), 0
+    start, times = time.perf_counter(), []
     while time.perf_counter() - start < args.seconds:
+        t = time.perf_counter()
         update()
-        count += 1
+        times.append(time.perf_counter() - t)
     elapsed = time.perf_counter() - start
+    count = len(times)
     print(
         json.dumps(
             {
@@ -137,7 +144,8 @@ def main():
                 "hidden": hidden,
                 "batch": batch,
                 "updates": count,
-                "updates_per_second": count / elapsed,
+                "updates_per_second": 1.0 / statistics.median(times),
+                "mean_updates_per_second": count / elapsed,
             }
         )
     )

@@ -1,11 +1,17 @@
-//! `dualrep bench sac`: SAC update throughput on one thread, as one JSON object, beside the
-//! machine's `sgemm` rate measured in the same process.
+//! `dualrep bench sac`: SAC update throughput (one thread unless `--threads`), as one JSON
+//! object, beside two ceilings measured in the same process: the core's FMA peak (a loop of
+//! fused multiply-adds on registers, at the kernels' vector width, on as many threads) and
+//! matrixmultiply's `sgemm` at 256^3 on one thread.
 //!
 //! The learner is DREF's (human critic on) with the task's sizes, updating on a replay buffer of
-//! random transitions. `fraction_of_sgemm` = `updates_per_second * mflop_per_update / 1000 /
-//! sgemm_gflops`: how close the whole update (products, elementwise work, sampling, Adam) comes
-//! to running nothing but large matrix products. `benches/reference/torch_sac_update.py` times
-//! the same update in PyTorch.
+//! random transitions. `gflops` = `updates_per_second * mflop_per_update / 1000`;
+//! `fraction_of_fma_peak` says how close the whole update (products, elementwise work,
+//! sampling, Adam) comes to the arithmetic limit of the core(s), `fraction_of_sgemm` how it
+//! compares with nothing but large products through matrixmultiply.
+//! `benches/reference/torch_sac_update.py` times the same update in PyTorch.
+//!
+//! `dualrep bench train` (`bench_train.rs`): environment steps per second of a whole run;
+//! `dualrep bench kernels` (`bench_kernels.rs`): each product of a layer alone.
 //!
 //! `dualrep bench env` (module `bench_env`): env steps per second in-process and through the
 //! env protocol.
@@ -22,8 +28,10 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use serde::Serialize;
 
+use super::compute::Compute;
 use crate::guidance::drpl::belief::{Belief, BeliefConfig, Response};
 use crate::guidance::feedback_schedule::EvaluativeMethod;
+use crate::rl::kernels::{self, KernelPath};
 use crate::rl::replay::{ReplayBuffer, Transition};
 use crate::rl::sac::{Sac, mflop_per_update};
 use crate::settings::Settings;
@@ -41,6 +49,10 @@ pub enum BenchWhat {
     Sac(SacBenchArgs),
     /// Milliseconds per DRPL belief update (2199 Metropolis-Hastings proposals).
     Belief(BeliefBenchArgs),
+    /// GFLOP/s of each of a layer's products on every kernel path, against the FMA peak.
+    Kernels(super::bench_kernels::KernelBenchArgs),
+    /// Environment steps per second of a whole run (env, scene graph, oracle, updates).
+    Train(super::bench_train::TrainBenchArgs),
     /// Env steps per second: our simulator, and through the env protocol on a remote env.
     Env(super::bench_env::EnvBenchArgs),
 }
@@ -92,19 +104,33 @@ struct SacBench {
     batch: usize,
     obs_dim: usize,
     act_dim: usize,
+    /// The kernel path that computed the updates, and how many threads they used.
+    kernels: KernelPath,
     threads: usize,
     updates: u64,
+    /// 1 / the median time of an update: what the machine does when nothing else runs on the
+    /// core (other processes on a shared machine only ever lengthen some updates).
     updates_per_second: f64,
+    /// Updates over the whole time, interruptions included.
+    mean_updates_per_second: f64,
     mflop_per_update: f64,
+    /// At the median rate.
     gflops: f64,
+    /// The FMA loop on `threads` threads at the kernels' vector width (for portable, the widest
+    /// this CPU has, which matrixmultiply uses).
+    fma_peak_gflops: f64,
+    fraction_of_fma_peak: f64,
+    /// matrixmultiply's `sgemm` at 256^3 on one thread.
     sgemm_gflops: f64,
     fraction_of_sgemm: f64,
 }
 
-pub fn run(args: BenchArgs) -> anyhow::Result<()> {
+pub fn run(args: BenchArgs, compute: &Compute) -> anyhow::Result<()> {
     match args.what {
-        BenchWhat::Sac(args) => bench_sac(args),
+        BenchWhat::Sac(args) => bench_sac(args, compute),
         BenchWhat::Belief(args) => bench_belief(args),
+        BenchWhat::Kernels(args) => super::bench_kernels::run(args, compute.threads.unwrap_or(1)),
+        BenchWhat::Train(args) => super::bench_train::run(args, compute),
         BenchWhat::Env(args) => super::bench_env::bench_env(args),
     }
 }
@@ -122,7 +148,13 @@ fn task_dims(task: Task) -> (usize, usize) {
     }
 }
 
-fn bench_sac(args: SacBenchArgs) -> anyhow::Result<()> {
+fn bench_sac(args: SacBenchArgs, compute: &Compute) -> anyhow::Result<()> {
+    // One thread unless asked: the figure the peers (PyTorch on one thread) compare with.
+    let threads = compute.threads.unwrap_or(1);
+    kernels::with_threads(threads, || bench_sac_on(args, compute.path, threads))
+}
+
+fn bench_sac_on(args: SacBenchArgs, path: KernelPath, threads: usize) -> anyhow::Result<()> {
     if !args.seconds.is_finite() || args.seconds <= 0.0 {
         bail!("--seconds must be positive");
     }
@@ -157,26 +189,35 @@ fn bench_sac(args: SacBenchArgs) -> anyhow::Result<()> {
 
     let budget = Duration::from_secs_f64(args.seconds);
     let start = Instant::now();
-    let mut updates = 0u64;
+    let mut times = Vec::with_capacity(4096);
     while start.elapsed() < budget {
+        let update = Instant::now();
         sac.update(&replay);
-        updates += 1;
+        times.push(update.elapsed().as_secs_f64());
     }
-    let updates_per_second = updates as f64 / start.elapsed().as_secs_f64();
+    let updates = times.len() as u64;
+    let mean_updates_per_second = updates as f64 / start.elapsed().as_secs_f64();
+    let updates_per_second = 1.0 / median(&mut times);
     let mflop = mflop_per_update(obs_dim, act_dim, &config);
     let gflops = updates_per_second * mflop / 1000.0;
-    let sgemm_gflops = sgemm_gflops(256, Duration::from_secs_f64(args.seconds.min(2.0)));
+    let ceiling_budget = Duration::from_secs_f64(args.seconds.min(2.0));
+    let fma_peak_gflops = path.fma_peak_gflops(threads, ceiling_budget);
+    let sgemm_gflops = sgemm_gflops(256, ceiling_budget);
     let report = SacBench {
         task: args.task,
         hidden: config.hidden,
         batch: config.batch_size,
         obs_dim,
         act_dim,
-        threads: 1,
+        kernels: path,
+        threads,
         updates,
         updates_per_second,
+        mean_updates_per_second,
         mflop_per_update: mflop,
         gflops,
+        fma_peak_gflops,
+        fraction_of_fma_peak: gflops / fma_peak_gflops,
         sgemm_gflops,
         fraction_of_sgemm: gflops / sgemm_gflops,
     };
@@ -225,12 +266,7 @@ fn bench_belief(args: BeliefBenchArgs) -> anyhow::Result<()> {
         })
         .collect();
     std::hint::black_box(belief.mean());
-    times.sort_by(f64::total_cmp);
-    let median = if times.len() % 2 == 1 {
-        times[times.len() / 2]
-    } else {
-        (times[times.len() / 2 - 1] + times[times.len() / 2]) / 2.0
-    };
+    let median = median(&mut times);
     let report = BeliefBench {
         features: args.features,
         answers: args.answers,
@@ -242,6 +278,16 @@ fn bench_belief(args: BeliefBenchArgs) -> anyhow::Result<()> {
     };
     println!("{}", serde_json::to_string(&report)?);
     Ok(())
+}
+
+/// The median of `values` (sorted in place); NaN if empty.
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    match values.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => values[n / 2],
+        n => (values[n / 2 - 1] + values[n / 2]) / 2.0,
+    }
 }
 
 fn random_replay(obs_dim: usize, act_dim: usize, n: usize) -> ReplayBuffer {

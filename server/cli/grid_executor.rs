@@ -12,6 +12,7 @@ use crate::report::local::LocalPool;
 use crate::report::runner::{Executor, Waiting};
 use crate::report::slurm::SlurmExecutor;
 use crate::report::slurm::script::ArraySettings;
+use crate::rl::kernels;
 
 /// The executors a grid can run on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -63,12 +64,30 @@ pub struct ExecutorArgs {
 }
 
 impl ExecutorArgs {
+    /// Runs at once with the local executor: --jobs, else the number of CPUs.
+    fn local_jobs(&self) -> usize {
+        self.jobs.map_or_else(
+            || std::thread::available_parallelism().map_or(1, usize::from),
+            |j| j as usize,
+        )
+    }
+
+    /// Threads each run's learner computes on: `threads` where given, else its share of the
+    /// cores (local: the cores divided by the runs at once, 1 to 2; slurm: --cpus-per-task).
+    pub fn threads_per_run(&self, threads: Option<usize>) -> usize {
+        threads.unwrap_or_else(|| match self.executor {
+            ExecutorKind::Local => (kernels::cores() / self.local_jobs()).clamp(1, 2),
+            ExecutorKind::Slurm => self.cpus_per_task.unwrap_or(1) as usize,
+        })
+    }
+
     /// The executor for a grid in `out`, checked before anything runs; `job_name` names its
-    /// Slurm arrays.
+    /// Slurm arrays, and every run gets `env` in its environment.
     pub fn build(
         &self,
         out: &Path,
         job_name: &str,
+        env: &[(String, String)],
     ) -> anyhow::Result<(Box<dyn Executor>, Waiting)> {
         let program = match &self.program {
             Some(p) => p.clone(),
@@ -78,11 +97,8 @@ impl ExecutorArgs {
             if let Some(option) = self.slurm_option_given() {
                 bail!("{option} is for --executor slurm");
             }
-            let jobs = self.jobs.map_or_else(
-                || std::thread::available_parallelism().map_or(1, usize::from),
-                |j| j as usize,
-            );
-            return Ok((Box::new(LocalPool::new(&program, jobs)), Waiting::UntilDone));
+            let pool = LocalPool::new(&program, self.local_jobs()).with_env(env);
+            return Ok((Box::new(pool), Waiting::UntilDone));
         }
         for (option, value) in [("--partition", &self.partition), ("--time", &self.time)] {
             if let Some(v) = value
@@ -113,6 +129,7 @@ impl ExecutorArgs {
             cpus_per_task: self.cpus_per_task.unwrap_or(1),
             max_running: self.jobs.map(|j| j as usize),
             extra: self.sbatch_args.clone(),
+            env: env.to_vec(),
         };
         let executor = SlurmExecutor::new(settings, out, Duration::from_secs_f64(poll))?;
         let waiting = if self.no_wait {

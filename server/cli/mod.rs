@@ -2,6 +2,9 @@
 
 mod bench;
 mod bench_env;
+mod bench_kernels;
+mod bench_train;
+mod compute;
 mod expert;
 mod grid_executor;
 mod loadtest;
@@ -26,6 +29,8 @@ use clap::{Parser, Subcommand};
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
+    #[command(flatten)]
+    pub compute: compute::ComputeArgs,
 }
 
 #[derive(Debug, Subcommand)]
@@ -44,19 +49,21 @@ pub enum Command {
     Reproduce(reproduce::ReproduceArgs),
     /// Real websocket trainers against a server: answers per second, ack latency, lost answers.
     Loadtest(loadtest::LoadtestArgs),
-    /// Time the learner: `bench sac` (updates per second against the sgemm peak), `bench belief`.
+    /// Time the learner: `bench sac` (updates per second against the FMA peak), `bench train`
+    /// (environment steps per second of a whole run), `bench kernels`, `bench belief`.
     Bench(bench::BenchArgs),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
+    let compute = cli.compute.install()?;
     match cli.command {
         Command::Serve(args) => serve::run(args),
         Command::Sim(args) => sim::run(args),
         Command::Train(args) => train::run(args),
         Command::Prefs(args) => prefs::run(args),
         Command::Expert(args) => expert::run(args),
-        Command::Reproduce(args) => reproduce::run(args),
-        Command::Bench(args) => bench::run(args),
+        Command::Reproduce(args) => reproduce::run(args, &compute),
+        Command::Bench(args) => bench::run(args, &compute),
         Command::Loadtest(args) => loadtest::run(args),
     }
 }

@@ -61,7 +61,7 @@ pub struct ReproduceArgs {
     pub executor: ExecutorArgs,
 }
 
-pub fn run(args: ReproduceArgs) -> anyhow::Result<()> {
+pub fn run(args: ReproduceArgs, compute: &super::compute::Compute) -> anyhow::Result<()> {
     if args.report_only {
         if args.executor.no_wait {
             bail!("--report-only runs nothing, so --no-wait has nothing to do");
@@ -73,9 +73,23 @@ pub fn run(args: ReproduceArgs) -> anyhow::Result<()> {
     }
     let config = grid_config(&args)?;
     let job_name = format!("dualrep-{}", config.figure.stem());
-    let (mut executor, waiting) = args.executor.build(&config.out, &job_name)?;
+    // Each run gets the cores its share allows (one each when the jobs fill the machine), and
+    // every run computes with the kernels chosen here.
+    let threads = args.executor.threads_per_run(compute.threads);
+    let env = [
+        ("DUALREP_THREADS".to_string(), threads.to_string()),
+        (
+            "DUALREP_KERNELS".to_string(),
+            compute.path.name().to_string(),
+        ),
+    ];
+    let (mut executor, waiting) = args.executor.build(&config.out, &job_name, &env)?;
 
     let progress = Progress::new(config.total_runs());
+    progress.line(&format!(
+        "runs each on {threads} thread(s) with the {} kernels",
+        compute.path
+    ));
     let mut runs = config.initial_runs();
     if config.wants_matched() && !config.has_dref() {
         for &task in &config.tasks {

@@ -147,6 +147,13 @@ async fn serve(args: ServeArgs) -> anyhow::Result<()> {
         data_dir.display(),
         running.max_running
     );
+    let threads = crate::rl::kernels::max_threads();
+    println!(
+        "sessions compute with the {} kernels, on {threads} thread(s) while one runs alone, the \
+         {} core(s) shared out while several run",
+        crate::rl::kernels::default_path(),
+        crate::rl::kernels::cores()
+    );
     running.wait().await
 }
 

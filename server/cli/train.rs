@@ -26,6 +26,7 @@ use crate::guidance::expert_oracle::{ExpertOracle, OracleRule};
 use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::remote_env::RemoteEnv;
 use crate::rl::Sac;
+use crate::rl::kernels::{self, KernelPath};
 use crate::sim::{Env, Task};
 
 #[derive(Debug, Args)]
@@ -169,6 +170,10 @@ pub struct TrainSummary {
     pub final_success_rate: f64,
     pub wall_seconds: f64,
     pub updates_per_second: f64,
+    /// The kernels that computed the run (`portable`, or `avx2` / `avx512`, which give the same
+    /// bits), and the most threads one product used.
+    pub kernels: KernelPath,
+    pub threads: usize,
     pub config: EvaluativeRunConfig,
 }
 
@@ -333,8 +338,17 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
 
     let label = format!("{task_id} {} seed {}", args.method, args.seed);
     let checkpoint_path = args.out.join(CHECKPOINT_FILE);
+    let saved = fs::read(&checkpoint_path);
+    if let Ok(bytes) = &saved {
+        keep_kernels_of(bytes, &checkpoint_path, &label)?;
+    }
+    eprintln!(
+        "{label}: {} kernels, {} thread(s)",
+        kernels::current_path(),
+        kernels::threads_now()
+    );
     let remote_env = remote.map(|env| Box::new(env) as Box<dyn Env>);
-    let (mut run, notes) = match fs::read(&checkpoint_path) {
+    let (mut run, notes) = match saved {
         Ok(bytes) => {
             let (run, notes) =
                 EvaluativeRun::resume_with_env(&bytes, &config, remote_env, trainer.as_mut())
@@ -393,6 +407,8 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
         final_success_rate,
         wall_seconds,
         updates_per_second: run.learner().updates() as f64 / wall_seconds,
+        kernels: kernels::current_path(),
+        threads: kernels::threads_now(),
         config,
     };
     publish_summary(&args.out.join("summary.json"), &summary)?;
@@ -402,6 +418,34 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
         }
         _ => Ok(()),
     }
+}
+
+/// A run goes on with kernels of the numerics it began with, so that it stays bit for bit what
+/// an uninterrupted run would have been: AVX-512 and AVX2 stand in for each other, the
+/// portable path only for itself.
+fn keep_kernels_of(bytes: &[u8], path: &Path, label: &str) -> anyhow::Result<()> {
+    let began = EvaluativeRun::checkpoint_kernels(bytes).with_context(|| {
+        format!(
+            "reading {} (delete it to start the run over)",
+            path.display()
+        )
+    })?;
+    let now = kernels::current_path();
+    if began.numerics() == now.numerics() {
+        return Ok(());
+    }
+    let Some(same) = began.available_equivalent() else {
+        anyhow::bail!(
+            "{} was computed with the {began} kernels, which this CPU cannot run; delete it to start \
+             the run over",
+            path.display()
+        );
+    };
+    eprintln!(
+        "{label}: the run began on the {began} kernels and goes on with {same} (not {now}), bit for bit"
+    );
+    kernels::set_default_path(same);
+    Ok(())
 }
 
 /// Cut `metrics.csv` back to its header and first `episodes` rows: the rows a run checkpoint

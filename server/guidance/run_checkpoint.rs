@@ -16,6 +16,7 @@ use super::{EvaluativeRun, EvaluativeRunConfig, EvaluativeTrainer};
 use crate::guidance::feedback_schedule::FeedbackSchedule;
 use crate::guidance::query_rule::QueryRule;
 use crate::rl::Sac;
+use crate::rl::kernels::{self, KernelPath};
 use crate::rl::replay::{ReplayBuffer, ReplayLayout};
 use crate::rl::rng_state::RngState;
 
@@ -42,6 +43,14 @@ struct RunState {
     trainer: serde_json::Value,
     /// Whatever the caller keeps with the run (the CLI: recent episodes, wall time so far).
     notes: serde_json::Value,
+    /// The kernels the run computed with; checkpoints written before there was a choice ran on
+    /// the portable path.
+    #[serde(default = "portable")]
+    kernels: KernelPath,
+}
+
+fn portable() -> KernelPath {
+    KernelPath::Portable
 }
 
 #[derive(Serialize, Deserialize)]
@@ -104,6 +113,7 @@ impl EvaluativeRun {
             replay,
             trainer: trainer.checkpoint_state(),
             notes,
+            kernels: kernels::current_path(),
         };
         let state = serde_json::to_vec(&state).expect("a run's state serialises");
         let learner = self.learner.to_safetensors();
@@ -116,6 +126,24 @@ impl EvaluativeRun {
         }
         bytes.extend_from_slice(&rows);
         bytes
+    }
+
+    /// The kernels a checkpoint's run computed with: to go on bit for bit, go on with kernels of
+    /// the same numerics ([`KernelPath::available_equivalent`]).
+    pub fn checkpoint_kernels(bytes: &[u8]) -> Result<KernelPath, RunCheckpointError> {
+        let err = |m: String| RunCheckpointError(m);
+        let rest = bytes
+            .strip_prefix(MAGIC)
+            .ok_or_else(|| err("not a dualrep run checkpoint".into()))?;
+        let (state, _) = split_blob(rest).ok_or_else(|| err("truncated state".into()))?;
+        #[derive(Deserialize)]
+        struct Kernels {
+            #[serde(default = "portable")]
+            kernels: KernelPath,
+        }
+        let state: Kernels =
+            serde_json::from_slice(state).map_err(|e| err(format!("state: {e}")))?;
+        Ok(state.kernels)
     }
 
     /// The run [`EvaluativeRun::checkpoint`] saved, with `trainer` put back to its state then,
@@ -232,7 +260,13 @@ mod tests {
     }
 
     #[test]
-    fn a_resumed_run_continues_bit_for_bit() {
+    fn a_resumed_run_continues_bit_for_bit_on_every_kernel_path() {
+        for path in KernelPath::ALL.into_iter().filter(|p| p.is_available()) {
+            kernels::with_path(path, || resumed_run_continues_bit_for_bit(path));
+        }
+    }
+
+    fn resumed_run_continues_bit_for_bit(path: KernelPath) {
         // Tasks whose random episodes are short, so a few hundred steps cross several.
         for (task, method) in [
             (Task::Placing, "dref"),
@@ -255,6 +289,7 @@ mod tests {
             let stopped_at = first.steps();
             let bytes = first.checkpoint(&first_oracle, serde_json::json!({"note": stopped_at}));
             drop(first);
+            assert_eq!(EvaluativeRun::checkpoint_kernels(&bytes).unwrap(), path);
 
             let mut fresh_oracle = oracle(task);
             let (mut resumed, notes) =
@@ -271,14 +306,40 @@ mod tests {
                 !expected.is_empty(),
                 "{task} {method}: episodes after the stop"
             );
-            assert_eq!(tail, expected, "{task} {method}");
+            assert_eq!(tail, expected, "{path} {task} {method}");
             assert_eq!(
                 resumed.learner().state_checksum(),
                 straight.learner().state_checksum(),
-                "{task} {method}"
+                "{path} {task} {method}"
             );
             assert_eq!(resumed.feedback_count(), straight.feedback_count());
             assert_eq!(resumed.cumulative_return(), straight.cumulative_return());
+        }
+    }
+
+    #[test]
+    fn a_run_is_the_same_bits_on_avx512_and_avx2_and_on_any_number_of_threads() {
+        let fast: Vec<KernelPath> = [KernelPath::Avx512, KernelPath::Avx2]
+            .into_iter()
+            .filter(|p| p.is_available())
+            .collect();
+        let config = tiny(Task::Placing, "dref");
+        let mut checksums = Vec::new();
+        for &path in &fast {
+            for threads in [1, 2] {
+                let checksum = kernels::with_path(path, || {
+                    kernels::with_threads(threads, || {
+                        let mut run = EvaluativeRun::new(config.clone(), 300);
+                        let mut trainer = oracle(Task::Placing);
+                        drive(&mut run, &mut trainer, 300);
+                        run.learner().state_checksum()
+                    })
+                });
+                checksums.push((path, threads, checksum));
+            }
+        }
+        for (path, threads, checksum) in &checksums {
+            assert_eq!(*checksum, checksums[0].2, "{path} on {threads} threads");
         }
     }
 

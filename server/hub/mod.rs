@@ -105,8 +105,12 @@ impl Hub {
         Ok(interrupted)
     }
 
-    /// Store a new session and queue it.
-    pub async fn launch(self: &Arc<Self>, spec: SessionSpec) -> Result<SessionRow, HubError> {
+    /// Store a new session and queue it. The kernels it computes with are recorded with it
+    /// (this server's, unless the launch named them), so that a resume replays it bit for bit.
+    pub async fn launch(self: &Arc<Self>, mut spec: SessionSpec) -> Result<SessionRow, HubError> {
+        spec.params
+            .kernels
+            .get_or_insert_with(crate::rl::kernels::default_path);
         spec.validate().map_err(HubError::Invalid)?;
         let id = random_hex(6);
         let token = random_hex(16);

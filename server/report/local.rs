@@ -21,6 +21,8 @@ use super::runner::{Event, Executor};
 /// A process pool of `jobs` children running `program`.
 pub struct LocalPool {
     program: PathBuf,
+    /// Variables set in every child's environment (the threads and kernels each run gets).
+    env: Vec<(String, String)>,
     jobs: usize,
     queue: VecDeque<RunSpec>,
     /// Runs in flight by slot; a slot is reused once its child has reported.
@@ -35,6 +37,7 @@ impl LocalPool {
         let (tx, rx) = mpsc::channel();
         Self {
             program: program.to_path_buf(),
+            env: Vec::new(),
             jobs: jobs.max(1),
             queue: VecDeque::new(),
             slots: Vec::new(),
@@ -42,6 +45,12 @@ impl LocalPool {
             tx,
             rx,
         }
+    }
+
+    /// Sets `env` in every child's environment.
+    pub fn with_env(mut self, env: &[(String, String)]) -> Self {
+        self.env = env.to_vec();
+        self
     }
 
     /// Starts queued runs until `jobs` are running.
@@ -59,11 +68,12 @@ impl LocalPool {
                 }
             };
             let (tx, program, child_spec) = (self.tx.clone(), self.program.clone(), spec.clone());
+            let env = self.env.clone();
             self.slots[slot] = Some(spec);
             self.running += 1;
             thread::spawn(move || {
                 let start = Instant::now();
-                let status = run_child(&program, &child_spec);
+                let status = run_child(&program, &env, &child_spec);
                 // The pool holds the receiver while children run; a send cannot fail.
                 let _ = tx.send((slot, status, start.elapsed().as_secs_f64()));
             });
@@ -111,13 +121,14 @@ impl Executor for LocalPool {
 }
 
 /// Runs one child to completion and says how it went.
-fn run_child(program: &Path, spec: &RunSpec) -> RunStatus {
+fn run_child(program: &Path, env: &[(String, String)], spec: &RunSpec) -> RunStatus {
     let stderr_path = spec.dir.join(STDERR_LOG);
     let started = fs::create_dir_all(&spec.dir).and_then(|()| {
         let stdout = File::create(spec.dir.join(STDOUT_LOG))?;
         let stderr = File::create(&stderr_path)?;
         Command::new(program)
             .args(&spec.args)
+            .envs(env.iter().map(|(k, v)| (k, v)))
             .stdin(Stdio::null())
             .stdout(stdout)
             .stderr(stderr)

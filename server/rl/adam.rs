@@ -1,5 +1,7 @@
 //! Adam (Kingma & Ba 2015) as `torch.optim.Adam` computes it on the CPU.
 
+use super::kernels::{self, KernelPath};
+
 /// Adam's hyper-parameters; the defaults are PyTorch's.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AdamConfig {
@@ -105,6 +107,15 @@ impl Adam {
             c.eps as f32,
         );
 
+        let scalars = Scalars {
+            one_minus_beta1,
+            beta2,
+            one_minus_beta2,
+            eps,
+            step_size,
+            bias_correction2_sqrt,
+        };
+        let path = kernels::current_path();
         let mut count = 0;
         for ((params, grads), (m, v)) in groups.into_iter().zip(self.m.iter_mut().zip(&mut self.v))
         {
@@ -116,18 +127,7 @@ impl Adam {
                 grads.len(),
                 m.len()
             );
-            for (((p, &g), m), v) in params
-                .iter_mut()
-                .zip(grads)
-                .zip(m.iter_mut())
-                .zip(v.iter_mut())
-            {
-                // torch.lerp with weight < 0.5 is `start + weight * (end - start)`.
-                *m += one_minus_beta1 * (g - *m);
-                *v = *v * beta2 + one_minus_beta2 * g * g;
-                let denom = v.sqrt() / bias_correction2_sqrt + eps;
-                *p += -step_size * (*m / denom);
-            }
+            step_group(path, params, grads, m, v, scalars);
         }
         assert_eq!(
             count,
@@ -138,9 +138,139 @@ impl Adam {
     }
 }
 
+/// One step's scalars, as `Adam::step` rounds them.
+#[derive(Clone, Copy)]
+struct Scalars {
+    one_minus_beta1: f32,
+    beta2: f32,
+    one_minus_beta2: f32,
+    eps: f32,
+    step_size: f32,
+    bias_correction2_sqrt: f32,
+}
+
+/// Elements below which a group is not shared out over threads.
+const MIN_SHARED: usize = 1 << 15;
+
+/// One group's update on `path`: the same operations on every element whatever the path (the
+/// fast paths only compile the loop for wider vectors) and whatever the number of threads.
+fn step_group(
+    path: KernelPath,
+    params: &mut [f32],
+    grads: &[f32],
+    m: &mut [f32],
+    v: &mut [f32],
+    s: Scalars,
+) {
+    let threads = kernels::threads_now();
+    if path == KernelPath::Portable || threads < 2 || params.len() < MIN_SHARED {
+        return step_chunk(path, params, grads, m, v, s);
+    }
+    let n = params.len();
+    let (p, m, v) = (
+        SharedMut(params.as_mut_ptr()),
+        SharedMut(m.as_mut_ptr()),
+        SharedMut(v.as_mut_ptr()),
+    );
+    dualrep_kernels::team::run(threads, &|part| {
+        let range = part.share(n, 16);
+        // SAFETY: members take disjoint ranges of the three buffers, borrowed mutably by this
+        // call until every member is done.
+        let slice = |x: &SharedMut| unsafe {
+            std::slice::from_raw_parts_mut(x.0.add(range.start), range.len())
+        };
+        step_chunk(
+            path,
+            slice(&p),
+            &grads[range.clone()],
+            slice(&m),
+            slice(&v),
+            s,
+        );
+    });
+}
+
+/// A mutable buffer shared by a team whose members each touch their own part.
+struct SharedMut(*mut f32);
+// SAFETY: see the one use, in `step_group`.
+unsafe impl Sync for SharedMut {}
+
+fn step_chunk(
+    path: KernelPath,
+    p: &mut [f32],
+    g: &[f32],
+    m: &mut [f32],
+    v: &mut [f32],
+    s: Scalars,
+) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a path is only ever current on a CPU that runs it.
+    unsafe {
+        match path {
+            KernelPath::Avx512 => return step_avx512(p, g, m, v, s),
+            KernelPath::Avx2 => return step_avx2(p, g, m, v, s),
+            KernelPath::Portable => {}
+        }
+    }
+    step_elements(p, g, m, v, s);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+unsafe fn step_avx512(p: &mut [f32], g: &[f32], m: &mut [f32], v: &mut [f32], s: Scalars) {
+    step_elements(p, g, m, v, s);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn step_avx2(p: &mut [f32], g: &[f32], m: &mut [f32], v: &mut [f32], s: Scalars) {
+    step_elements(p, g, m, v, s);
+}
+
+/// `torch.optim.adam._single_tensor_adam`'s arithmetic, element by element (no operation here
+/// may fuse into an FMA: Rust never contracts `a * b + c`).
+#[inline(always)]
+fn step_elements(params: &mut [f32], grads: &[f32], m: &mut [f32], v: &mut [f32], s: Scalars) {
+    for (((p, &g), m), v) in params
+        .iter_mut()
+        .zip(grads)
+        .zip(m.iter_mut())
+        .zip(v.iter_mut())
+    {
+        // torch.lerp with weight < 0.5 is `start + weight * (end - start)`.
+        *m += s.one_minus_beta1 * (g - *m);
+        *v = *v * s.beta2 + s.one_minus_beta2 * g * g;
+        let denom = v.sqrt() / s.bias_correction2_sqrt + s.eps;
+        *p += -s.step_size * (*m / denom);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_path_and_thread_count_steps_to_the_same_bits() {
+        let n = 100_003;
+        let grads: Vec<f32> = (0..n).map(|i| ((i as f32) * 0.77).sin() * 1e-2).collect();
+        let mut results = Vec::new();
+        kernels::on_every_path(|path| {
+            for threads in [1, 2] {
+                let mut params: Vec<f32> = (0..n).map(|i| (i as f32 * 0.1).cos()).collect();
+                let mut adam = Adam::new(AdamConfig::with_lr(0.01), &[n]);
+                kernels::with_threads(threads, || {
+                    for _ in 0..3 {
+                        adam.step([(&mut params[..], &grads[..])]);
+                    }
+                });
+                let bits: Vec<u32> = params.iter().map(|x| x.to_bits()).collect();
+                results.push((path, threads, bits));
+            }
+        });
+        for (path, threads, bits) in &results {
+            assert!(*bits == results[0].2, "{path} on {threads} threads");
+        }
+    }
 
     #[test]
     fn first_step_moves_each_parameter_by_lr_against_its_gradient_sign() {

@@ -11,23 +11,13 @@
 //! - a weight, PyTorch's row-major `(n_out, n_in)`, is stored flat; read column-major it is
 //!   `W^T`, an `n_in x n_out` matrix.
 //!
-//! Whatever the layout, each layer's three products contract different pairs of dimensions, so
-//! two of them need a transposed operand. Here that is always a zero-copy strided view, and every
-//! product is one `sgemm` call (`rl::gemm`), which packs any strides into its own panels:
-//!
-//! | product | formula | operands |
-//! |---|---|---|
-//! | forward | `z = W x + b` | `W`: the weight buffer viewed with strides `(n_in, 1)` |
-//! | input gradient | `dx = W^T dz` | `W^T`: the weight buffer as stored |
-//! | weight gradient | `dW^T += x dz^T` | `dz^T`: the gradient buffer viewed with strides `(n_out, 1)` |
-//!
-//! nalgebra's `gemm_tr` would spare the views but loops over `gemv` instead of calling `sgemm`;
-//! nalgebra's `gemm` is avoided for the reason given in `rl::gemm`.
+//! Whatever the layout, each layer's three products contract different pairs of dimensions:
+//! forward `z = W x + b`, input gradient `dx = W^T dz`, weight gradient `dW^T += x dz^T`.
+//! `rl::kernels` computes them, on the portable path (matrixmultiply) or our own kernels.
 
-use nalgebra::{DMatrix, DMatrixView, DMatrixViewMut};
 use rand::Rng;
 
-use super::gemm::gemm;
+use super::kernels::{self, DenseLayer};
 use super::linear::Linear;
 use super::workspace::MlpWorkspace;
 
@@ -189,27 +179,18 @@ impl Mlp {
     }
 
     /// Forward pass of the batch in `ws.input_mut()`; the result is `ws.output()`. Keeps every
-    /// hidden activation in `ws` for the backward pass. Allocates nothing of its own (each
-    /// product does, inside `sgemm`: see the module map of `rl`).
+    /// hidden activation in `ws` for the backward pass. Allocates nothing of its own (on the
+    /// portable path each product does, inside `sgemm`: see the module map of `rl`).
     pub fn forward(&self, ws: &mut MlpWorkspace) {
         ws.check_shape(&self.layers);
         let last = self.layers.len() - 1;
         for (l, layer) in self.layers.iter().enumerate() {
             let (before, after) = ws.activations.split_at_mut(l + 1);
-            let x = &before[l];
-            let z = &mut after[0];
-            // z = W x, then + b and ReLU in one pass over z.
-            gemm(1.0, &layer.w(&self.params), x, 0.0, z);
-            let b = layer.bias(&self.params);
-            for column in z.as_mut_slice().chunks_exact_mut(layer.n_out) {
-                for (v, &b_i) in column.iter_mut().zip(b) {
-                    *v += b_i;
-                    // `< 0` rather than `max(0)`: a NaN passes through, as in torch.relu.
-                    if l < last && *v < 0.0 {
-                        *v = 0.0;
-                    }
-                }
-            }
+            let d = DenseLayer {
+                layer,
+                params: &self.params,
+            };
+            kernels::forward_layer(d, &before[l], &mut after[0], l < last);
         }
     }
 
@@ -244,50 +225,18 @@ fn backward(
     input_grad: bool,
 ) {
     ws.check_shape(layers);
-    let batch = ws.batch();
     for (l, layer) in layers.iter().enumerate().rev() {
         let (below, above) = ws.grads.split_at_mut(l + 1);
         let dz = &above[0];
         if let Some(grads) = param_grads.as_deref_mut() {
-            let x = &ws.activations[l];
-            // dz^T (batch x n_out): the column-major dz buffer read with swapped strides.
-            let dz_t = DMatrixView::from_slice_with_strides(
-                dz.as_slice(),
-                batch,
-                layer.n_out,
-                layer.n_out,
-                1,
-            );
-            let mut dw_t = DMatrixViewMut::from_slice(
-                &mut grads[layer.weight_range()],
-                layer.n_in,
-                layer.n_out,
-            );
-            gemm(1.0, x, &dz_t, 1.0, &mut dw_t);
-            let db = &mut grads[layer.bias_range()];
-            for column in dz.as_slice().chunks_exact(layer.n_out) {
-                for (g, &d) in db.iter_mut().zip(column) {
-                    *g += d;
-                }
-            }
+            kernels::weight_grad(layer, grads, &ws.activations[l], dz);
         }
         if l == 0 && !input_grad {
             continue;
         }
-        let dx: &mut DMatrix<f32> = &mut below[l];
-        gemm(1.0, &layer.w_t(params), dz, 0.0, dx);
-        if l > 0 {
-            // Through the ReLU that produced x: h = max(z, 0), so dh/dz = [h > 0].
-            for (g, &h) in dx
-                .as_mut_slice()
-                .iter_mut()
-                .zip(ws.activations[l].as_slice())
-            {
-                // A select with an unconditional store, not a conditional store: it vectorises
-                // (the branchy form cost a fifth of a Lunar Lander update).
-                *g = if h <= 0.0 { 0.0 } else { *g };
-            }
-        }
+        // Through the ReLU that produced x (h = max(z, 0), so dh/dz = [h > 0]) below the output.
+        let relu_output = (l > 0).then(|| &ws.activations[l]);
+        kernels::input_grad(DenseLayer { layer, params }, dz, &mut below[l], relu_output);
     }
 }
 

@@ -10,7 +10,9 @@
 //!   checkpoints. Its module doc explains the memory layout.
 //! - [`workspace`]: [`MlpWorkspace`], every activation and gradient buffer of one batch size,
 //!   so that a training step allocates nothing of its own.
-//! - `gemm` (private): the one matrix product, matrixmultiply's `sgemm` on nalgebra matrices and views.
+//! - [`kernels`]: every layer's products, on the portable path (matrixmultiply's `sgemm`, the
+//!   same bits everywhere) or our own AVX-512 / AVX2 kernels chosen at run time, on one or more
+//!   threads.
 //! - [`adam`]: [`Adam`] with PyTorch's defaults and arithmetic.
 //! - [`loss`]: [`mse_loss`] with its gradient.
 //! - [`squashed_gaussian`]: SAC's tanh-squashed Gaussian policy head: sampling, log-prob
@@ -23,9 +25,10 @@
 //! ## Allocation
 //!
 //! After the workspaces exist, forward, backward, [`mse_loss`] and [`Adam::step`] allocate
-//! nothing themselves. One allocation per matrix product remains, not ours: matrixmultiply's
-//! `sgemm` allocates and frees its packing buffer inside every call (it has no API to pass one
-//! in). `tests/rl_no_alloc.rs` pins this down: exactly one allocation per product, nothing kept.
+//! nothing themselves, and on the fast kernel paths nothing at all. On the portable path one
+//! allocation per matrix product remains, not ours: matrixmultiply's `sgemm` allocates and
+//! frees its packing buffer inside every call (it has no API to pass one in).
+//! `tests/rl_no_alloc.rs` pins this down on every path this CPU runs.
 //!
 //! ## How SAC uses it
 //!
@@ -86,7 +89,7 @@
 //! forward passes must be kept until the backward passes.
 
 pub mod adam;
-mod gemm;
+pub mod kernels;
 pub mod linear;
 pub mod loss;
 pub mod mlp;

@@ -6,6 +6,8 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
+use crate::rl::kernels::{self, KernelPath};
+
 use super::events::{
     AnswerValue, Controls, Ending, Halt, Observer, Revision, SessionEvent, SessionSink,
     StoredRevision,
@@ -33,14 +35,34 @@ pub struct SessionContext {
 }
 
 /// Run the session to its end and report how it ended (also sent as `SessionEvent::Ended`).
+///
+/// The learner computes with the session's kernels (or kernels of the same numerics) on this
+/// thread, and counts as active while it runs, so that sessions running at once share the
+/// cores between their products.
 pub fn run_session(spec: &SessionSpec, ctx: SessionContext) -> Ending {
     let sink = ctx.sink.clone();
-    let ending = match run(spec, ctx) {
-        Ok(ending) => ending,
+    let ending = match session_kernels(spec) {
+        Ok(path) => {
+            let _active = kernels::ActiveLearner::register();
+            match kernels::with_path(path, || run(spec, ctx)) {
+                Ok(ending) => ending,
+                Err(reason) => Ending::Failed(reason),
+            }
+        }
         Err(reason) => Ending::Failed(reason),
     };
     sink.send(SessionEvent::Ended(ending.clone()));
     ending
+}
+
+/// The kernels to run `spec` with: those it was launched with, or others of the same numerics.
+fn session_kernels(spec: &SessionSpec) -> Result<KernelPath, String> {
+    match spec.settings()?.kernels {
+        None => Ok(kernels::default_path()),
+        Some(path) => path.available_equivalent().ok_or_else(|| {
+            format!("the session computes with the {path} kernels, which this CPU cannot run")
+        }),
+    }
 }
 
 /// Builds the run and drives it. The observer (the recording) goes with the trainer and is

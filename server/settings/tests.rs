@@ -228,3 +228,17 @@ fn merged_settings_take_the_later_value() {
     let s = file.merged(flags).unwrap();
     assert_eq!((s.c, s.k), (Some(0.2), Some(3)));
 }
+
+#[test]
+fn kernels_are_a_session_setting_and_nonsense_is_refused() {
+    let s = Settings::from_json(json!({"kernels": "portable"})).unwrap();
+    assert_eq!(s.session().unwrap().kernels, Some(KernelPath::Portable));
+    assert_eq!(s.session_keys_set(), vec!["kernels"]);
+    // Not the algorithm's: the run builds with it set.
+    dref(Task::Reaching, &s).unwrap();
+    assert_eq!(Settings::default().session().unwrap().kernels, None);
+    for bad in [json!({"kernels": "fast"}), json!({"kernels": 2})] {
+        let err = Settings::from_json(bad.clone()).unwrap_err();
+        assert!(err.contains("kernels"), "{bad}: {err}");
+    }
+}

@@ -30,6 +30,8 @@ pub struct ArraySettings {
     pub max_running: Option<usize>,
     /// Passed to `sbatch` as they are, after ours (so they win).
     pub extra: Vec<String>,
+    /// Variables every task exports before it runs (the threads and kernels each run gets).
+    pub env: Vec<(String, String)>,
 }
 
 /// Single-quotes `word` for bash, so that spaces, quotes and newlines stay inside it.
@@ -58,6 +60,9 @@ pub fn batch_script(
         "program={}\n",
         shell_quote(&settings.program.to_string_lossy())
     );
+    for (name, value) in &settings.env {
+        s += &format!("export {name}={}\n", shell_quote(value));
+    }
     s += "case \"${SLURM_ARRAY_TASK_ID:-}\" in\n";
     for (index, run) in runs.iter().enumerate() {
         let words: Vec<String> = run.args.iter().map(|a| shell_quote(a)).collect();

@@ -16,11 +16,12 @@ fn settings() -> ArraySettings {
         cpus_per_task: 1,
         max_running: None,
         extra: vec![],
+        env: vec![("DUALREP_KERNELS".into(), "avx2".into())],
     }
 }
 
 /// A run whose "program" is `sh -c script sh WORD`: it prints WORD and its own arguments'
-/// count, so the test sees exactly which words reached it.
+/// count (and the kernels the task exported), so the test sees exactly which words reached it.
 fn run(root: &Path, seed: u64, word: &str) -> RunSpec {
     RunSpec {
         task: Task::Placing,
@@ -29,7 +30,8 @@ fn run(root: &Path, seed: u64, word: &str) -> RunSpec {
         dir: root.join(format!("placing/drpl/seed{seed}")),
         args: vec![
             "-c".into(),
-            r#"printf '%s|%s\n' "$#" "$1"; echo "to stderr" >&2; exit 3"#.into(),
+            r#"printf '%s|%s|%s\n' "$#" "$1" "${DUALREP_KERNELS:-}"; echo "to stderr" >&2; exit 3"#
+                .into(),
             "sh".into(),
             word.into(),
         ],
@@ -79,7 +81,7 @@ fn report_slurm_array_task_runs_its_run_into_the_run_directory() {
     let dir = &runs[1].dir;
     assert_eq!(
         fs::read_to_string(dir.join(STDOUT_LOG)).unwrap(),
-        "1|it's the 'second'\n"
+        "1|it's the 'second'|avx2\n"
     );
     assert_eq!(
         fs::read_to_string(dir.join(STDERR_LOG)).unwrap(),

@@ -149,43 +149,49 @@ fn check(
 
 #[test]
 fn plain_sac_agrees_with_pytorch() {
-    let worst = check(
-        None,
-        [SAC_LOSSES_0, SAC_LOSSES_1],
-        SAC_FINGERPRINTS,
-        SAC_ACTOR_PROBE,
-    );
-    eprintln!("plain SAC: worst relative error {worst:.2e}");
+    crate::rl::kernels::on_every_path(|path| {
+        let worst = check(
+            None,
+            [SAC_LOSSES_0, SAC_LOSSES_1],
+            SAC_FINGERPRINTS,
+            SAC_ACTOR_PROBE,
+        );
+        eprintln!("{path}: plain SAC: worst relative error {worst:.2e}");
+    });
 }
 
 #[test]
 fn dref_with_the_authors_mix_agrees_with_pytorch() {
-    let human = HumanCriticConfig {
-        lambda: 9.0,
-        mix: ActorMix::Authors,
-        mask: false,
-    };
-    let worst = check(
-        Some(human),
-        [AUTHORS_LOSSES_0, AUTHORS_LOSSES_1],
-        AUTHORS_FINGERPRINTS,
-        AUTHORS_ACTOR_PROBE,
-    );
-    eprintln!("authors' mix: worst relative error {worst:.2e}");
+    crate::rl::kernels::on_every_path(|path| {
+        let human = HumanCriticConfig {
+            lambda: 9.0,
+            mix: ActorMix::Authors,
+            mask: false,
+        };
+        let worst = check(
+            Some(human),
+            [AUTHORS_LOSSES_0, AUTHORS_LOSSES_1],
+            AUTHORS_FINGERPRINTS,
+            AUTHORS_ACTOR_PROBE,
+        );
+        eprintln!("{path}: authors' mix: worst relative error {worst:.2e}");
+    });
 }
 
 #[test]
 fn dref_with_the_paper_mix_and_mask_agrees_with_pytorch() {
-    let human = HumanCriticConfig {
-        lambda: 2.0,
-        mix: ActorMix::Paper,
-        mask: true,
-    };
-    let worst = check(
-        Some(human),
-        [PAPER_LOSSES_0, PAPER_LOSSES_1],
-        PAPER_FINGERPRINTS,
-        PAPER_ACTOR_PROBE,
-    );
-    eprintln!("paper's mix, masked: worst relative error {worst:.2e}");
+    crate::rl::kernels::on_every_path(|path| {
+        let human = HumanCriticConfig {
+            lambda: 2.0,
+            mix: ActorMix::Paper,
+            mask: true,
+        };
+        let worst = check(
+            Some(human),
+            [PAPER_LOSSES_0, PAPER_LOSSES_1],
+            PAPER_FINGERPRINTS,
+            PAPER_ACTOR_PROBE,
+        );
+        eprintln!("{path}: paper's mix, masked: worst relative error {worst:.2e}");
+    });
 }
