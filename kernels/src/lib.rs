@@ -47,7 +47,7 @@ use team::Part;
 /// The instruction sets the kernels are compiled for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Isa {
-    /// AVX-512F: 16 lanes, 32 x 12 tiles.
+    /// AVX-512F: 16 lanes, 48 x 8 tiles.
     Avx512,
     /// AVX2 + FMA: 8 lanes, 16 x 6 tiles.
     Avx2,
