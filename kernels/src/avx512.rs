@@ -18,6 +18,12 @@ const MV: usize = 3;
 const NMV: usize = 4;
 /// Columns of an output tile.
 const NR: usize = 8;
+/// The tile of a product of at most `WNR` columns, whose column-major `A` is read in place
+/// rather than packed: `WMV` vectors by `WNR` columns. Two vectors by twelve columns keep
+/// a first layer's weight gradient (ten columns) in one tile, where eight columns took two
+/// and a packed copy of `A`.
+const WMV: usize = 2;
+const WNR: usize = 12;
 
 #[inline(always)]
 fn first(n: usize) -> __mmask16 {
@@ -141,15 +147,15 @@ impl Isa for Avx512 {
 
 #[target_feature(enable = "avx512f,avx2,fma")]
 pub(crate) unsafe fn forward_part(part: &Part<'_>, job: &ForwardJob<'_>) {
-    unsafe { layers::forward_part::<Avx512, MV, NR, NMV>(part, job) }
+    unsafe { layers::forward_part::<Avx512, MV, NR, NMV, WMV, WNR>(part, job) }
 }
 
 #[target_feature(enable = "avx512f,avx2,fma")]
 pub(crate) unsafe fn weight_grad_part(part: &Part<'_>, job: &BackwardJob<'_>) {
-    unsafe { layers::weight_grad_part::<Avx512, MV, NR, NMV>(part, job) }
+    unsafe { layers::weight_grad_part::<Avx512, MV, NR, NMV, WMV, WNR>(part, job) }
 }
 
 #[target_feature(enable = "avx512f,avx2,fma")]
 pub(crate) unsafe fn input_grad_part(part: &Part<'_>, job: &InputGradJob<'_>) {
-    unsafe { layers::input_grad_part::<Avx512, MV, NR, NMV>(part, job) }
+    unsafe { layers::input_grad_part::<Avx512, MV, NR, NMV, WMV, WNR>(part, job) }
 }
