@@ -143,16 +143,16 @@ pub(crate) unsafe fn product<
                     other => other,
                 };
                 // The last row tile of a block may be short: as few vectors as its rows need
-                // (a 300-row layer is six 48-row tiles and one of 12 rows).
-                let vectors = height.div_ceil(I::LANES);
+                // (a 300-row layer is six 48-row tiles and one of 12 rows on AVX-512).
+                let two = MV > 2 && height > I::LANES && height <= 2 * I::LANES;
                 unsafe {
-                    match (p.b_cols, vectors) {
-                        (true, 1) => tile::<I, 1, NR, true, true>(&args, epilogue),
-                        (false, 1) => tile::<I, 1, NR, false, true>(&args, epilogue),
-                        (true, 2) if MV > 2 => tile::<I, 2, NR, true, true>(&args, epilogue),
-                        (false, 2) if MV > 2 => tile::<I, 2, NR, false, true>(&args, epilogue),
-                        (true, _) => tile::<I, MV, NR, true, true>(&args, epilogue),
-                        (false, _) => tile::<I, MV, NR, false, true>(&args, epilogue),
+                    match (p.b_cols, height <= I::LANES) {
+                        (true, _) if two => tile::<I, 2, NR, true, true>(&args, epilogue),
+                        (false, _) if two => tile::<I, 2, NR, false, true>(&args, epilogue),
+                        (true, false) => tile::<I, MV, NR, true, true>(&args, epilogue),
+                        (false, false) => tile::<I, MV, NR, false, true>(&args, epilogue),
+                        (true, true) => tile::<I, 1, NR, true, true>(&args, epilogue),
+                        (false, true) => tile::<I, 1, NR, false, true>(&args, epilogue),
                     }
                 }
                 i += mr;

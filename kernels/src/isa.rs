@@ -43,16 +43,4 @@ pub(crate) trait Isa: Copy + 'static {
     /// `((s[i] + s[i + 8]) + (s[i + 4] + ...))`: lanes `i` and `i + 8` first, then `i` and
     /// `i + 4` of those 8, then `i` and `i + 2`, then the last two.
     unsafe fn group_sum(g: Self::G) -> f32;
-
-    /// Ask for the cache line at `p` in L1 ahead of its use (never faults, changes no value).
-    #[inline(always)]
-    unsafe fn prefetch(p: *const f32) {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: a prefetch reads nothing the program sees, at any address.
-        unsafe {
-            std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p.cast())
-        };
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = p;
-    }
 }

@@ -11,9 +11,6 @@
 
 use crate::isa::Isa;
 
-/// How many steps of `k` ahead a packed `A` is prefetched.
-const A_PREFETCH_STEPS: usize = 8;
-
 /// Where a tile's operands are.
 #[derive(Clone, Copy)]
 pub(crate) struct TileArgs {
@@ -79,12 +76,6 @@ pub(crate) unsafe fn tile<
     }
     for kk in 0..t.k {
         let a = unsafe { t.a.add(kk * t.a_ks) };
-        if PADDED {
-            // A packed tile streams from L2 and is read once: ask for it ahead.
-            for v in 0..MV {
-                unsafe { I::prefetch(a.add(A_PREFETCH_STEPS * t.a_ks + v * lanes)) };
-            }
-        }
         let mut av = [unsafe { I::zero() }; MV];
         for v in 0..MV {
             av[v] = unsafe {
