@@ -1,7 +1,8 @@
 //! [`Isa`] for AVX-512F: 16 lanes per register, 48 x 8 output tiles (24 accumulators of
 //! the 32 registers). Three vectors by eight columns take 11 loads per 24 FMAs where 32 x 12
-//! took 14, and ran Lunar Lander's 400:300 products 4-9 % faster on an Intel Xeon (Sapphire
-//! Rapids class); the tile's shape does not change a single bit (see `tile.rs`).
+//! took 14. On an Intel Xeon (Sapphire Rapids class) they ran Lunar Lander's 400:300 products
+//! 3-10 % faster than 32 x 12 in interleaved runs, though the whole update moved by less than
+//! that machine's noise (`docs/results/speed`). The tile's shape changes no bit (`tile.rs`).
 
 use std::arch::x86_64::*;
 

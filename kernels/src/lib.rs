@@ -15,6 +15,8 @@
 //! - `isa.rs`: the vector operations everything is written in, implemented by `avx512.rs`
 //!   and `avx2.rs`; `scratch.rs`: per-thread packing memory; `cache.rs`: the L2 size.
 //! - [`fma_peak`]: the core's measured FMA peak.
+//! - `examples/layer_rates.rs`: each product of Lunar Lander's critic timed alone, for tuning
+//!   tile shapes without building the service.
 //!
 //! ## Numerics
 //!
