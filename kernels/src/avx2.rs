@@ -16,6 +16,10 @@ const MV: usize = 2;
 const NMV: usize = 2;
 /// Columns of an output tile.
 const NR: usize = 6;
+/// The tile of a product of at most `WNR` columns, whose column-major `A` is read in place
+/// rather than packed: the main tile.
+const WMV: usize = 2;
+const WNR: usize = 6;
 
 /// All-ones in the first `n` of 8 lanes.
 #[inline(always)]
@@ -158,15 +162,15 @@ impl Isa for Avx2 {
 
 #[target_feature(enable = "avx2,fma")]
 pub(crate) unsafe fn forward_part(part: &Part<'_>, job: &ForwardJob<'_>) {
-    unsafe { layers::forward_part::<Avx2, MV, NR, NMV>(part, job) }
+    unsafe { layers::forward_part::<Avx2, MV, NR, NMV, WMV, WNR>(part, job) }
 }
 
 #[target_feature(enable = "avx2,fma")]
 pub(crate) unsafe fn weight_grad_part(part: &Part<'_>, job: &BackwardJob<'_>) {
-    unsafe { layers::weight_grad_part::<Avx2, MV, NR, NMV>(part, job) }
+    unsafe { layers::weight_grad_part::<Avx2, MV, NR, NMV, WMV, WNR>(part, job) }
 }
 
 #[target_feature(enable = "avx2,fma")]
 pub(crate) unsafe fn input_grad_part(part: &Part<'_>, job: &InputGradJob<'_>) {
-    unsafe { layers::input_grad_part::<Avx2, MV, NR, NMV>(part, job) }
+    unsafe { layers::input_grad_part::<Avx2, MV, NR, NMV, WMV, WNR>(part, job) }
 }

@@ -1,5 +1,8 @@
-//! [`Isa`] for AVX-512F: 16 lanes per register, 32 x 12 output tiles (24 accumulators of
-//! the 32 registers).
+//! [`Isa`] for AVX-512F: 16 lanes per register, 48 x 8 output tiles (24 accumulators of
+//! the 32 registers). Three vectors by eight columns take 11 loads per 24 FMAs where 32 x 12
+//! took 14. On an Intel Xeon (Sapphire Rapids class) they ran Lunar Lander's 400:300 products
+//! 3-10 % faster than 32 x 12 in interleaved runs, though the whole update moved by less than
+//! that machine's noise (`docs/results/speed`). The tile's shape changes no bit (`tile.rs`).
 
 use std::arch::x86_64::*;
 
@@ -10,12 +13,18 @@ use crate::team::Part;
 #[derive(Clone, Copy)]
 pub(crate) struct Avx512;
 
-/// Rows of an output tile in registers: two vectors.
-const MV: usize = 2;
+/// Rows of an output tile in registers: three vectors.
+const MV: usize = 3;
 /// Rows (in vectors) of a tile of at most 4 columns.
 const NMV: usize = 4;
 /// Columns of an output tile.
-const NR: usize = 12;
+const NR: usize = 8;
+/// The tile of a product of at most `WNR` columns, whose column-major `A` is read in place
+/// rather than packed: `WMV` vectors by `WNR` columns. Two vectors by twelve columns keep
+/// a first layer's weight gradient (ten columns) in one tile, where eight columns took two
+/// and a packed copy of `A`.
+const WMV: usize = 2;
+const WNR: usize = 12;
 
 #[inline(always)]
 fn first(n: usize) -> __mmask16 {
@@ -139,15 +148,15 @@ impl Isa for Avx512 {
 
 #[target_feature(enable = "avx512f,avx2,fma")]
 pub(crate) unsafe fn forward_part(part: &Part<'_>, job: &ForwardJob<'_>) {
-    unsafe { layers::forward_part::<Avx512, MV, NR, NMV>(part, job) }
+    unsafe { layers::forward_part::<Avx512, MV, NR, NMV, WMV, WNR>(part, job) }
 }
 
 #[target_feature(enable = "avx512f,avx2,fma")]
 pub(crate) unsafe fn weight_grad_part(part: &Part<'_>, job: &BackwardJob<'_>) {
-    unsafe { layers::weight_grad_part::<Avx512, MV, NR, NMV>(part, job) }
+    unsafe { layers::weight_grad_part::<Avx512, MV, NR, NMV, WMV, WNR>(part, job) }
 }
 
 #[target_feature(enable = "avx512f,avx2,fma")]
 pub(crate) unsafe fn input_grad_part(part: &Part<'_>, job: &InputGradJob<'_>) {
-    unsafe { layers::input_grad_part::<Avx512, MV, NR, NMV>(part, job) }
+    unsafe { layers::input_grad_part::<Avx512, MV, NR, NMV, WMV, WNR>(part, job) }
 }

@@ -24,7 +24,13 @@ pub(crate) unsafe fn dot_forward<I: Isa>(part: &Part<'_>, job: &ForwardJob<'_>) 
             let mut o = 0;
             while o < m {
                 let r = 2.min(m - o);
-                unsafe { dot_tile::<I, 2, 4>(job, o, r, s, c) };
+                // A single row (a critic's output) on its own: a 2-row tile would compute it
+                // twice.
+                if r == 1 {
+                    unsafe { dot_tile::<I, 1, 4>(job, o, r, s, c) };
+                } else {
+                    unsafe { dot_tile::<I, 2, 4>(job, o, r, s, c) };
+                }
                 o += 2;
             }
         }

@@ -53,24 +53,36 @@ pub(crate) fn packed_len(m: usize, k: usize) -> usize {
 }
 
 /// Pack `A`, then compute this member's tiles: whole columns of `C` in `NR`-wide chunks when
-/// there are at least as many column tiles as row tiles, else whole rows. A `C` of one column
-/// tile uses each row of `A` once, so a column-major `A` is read in place instead, by tiles of
-/// `NMV` vectors by 4 columns when `C` has at most 4 (a head's weight gradient).
+/// there are at least as many column tiles as row tiles, else whole rows. A `C` of at most
+/// `WNR` columns uses each row of `A` once, so a column-major `A` is read in place instead, by
+/// tiles of `WMV` vectors by `WNR` columns (a first layer's weight gradient), or of `NMV`
+/// vectors by 4 columns when `C` has at most 4 (a head's weight gradient).
 ///
 /// # Safety
 /// The operands hold their shapes, `C` is writable and aliases neither `A` nor `B`, and the
 /// caller is compiled for `I`'s instruction set.
 #[inline(always)]
-pub(crate) unsafe fn product<I: Isa, const MV: usize, const NR: usize, const NMV: usize>(
+pub(crate) unsafe fn product<
+    I: Isa,
+    const MV: usize,
+    const NR: usize,
+    const NMV: usize,
+    const WMV: usize,
+    const WNR: usize,
+>(
     part: &Part<'_>,
     p: &Product,
 ) {
     if let ASource::Columns { .. } = p.a {
+        // One column (a critic output's weight gradient): 4 columns would compute it 4 times.
+        if p.n == 1 {
+            return unsafe { in_place::<I, NMV, 1>(part, p) };
+        }
         if p.n <= 4 {
             return unsafe { in_place::<I, NMV, 4>(part, p) };
         }
-        if p.n <= NR {
-            return unsafe { in_place::<I, MV, NR>(part, p) };
+        if p.n <= WNR {
+            return unsafe { in_place::<I, WMV, WNR>(part, p) };
         }
     }
     let mr = MV * I::LANES;
@@ -130,8 +142,13 @@ pub(crate) unsafe fn product<I: Isa, const MV: usize, const NR: usize, const NMV
                     },
                     other => other,
                 };
+                // The last row tile of a block may be short: as few vectors as its rows need
+                // (a 300-row layer is six 48-row tiles and one of 12 rows on AVX-512).
+                let two = MV > 2 && height > I::LANES && height <= 2 * I::LANES;
                 unsafe {
                     match (p.b_cols, height <= I::LANES) {
+                        (true, _) if two => tile::<I, 2, NR, true, true>(&args, epilogue),
+                        (false, _) if two => tile::<I, 2, NR, false, true>(&args, epilogue),
                         (true, false) => tile::<I, MV, NR, true, true>(&args, epilogue),
                         (false, false) => tile::<I, MV, NR, false, true>(&args, epilogue),
                         (true, true) => tile::<I, 1, NR, true, true>(&args, epilogue),
@@ -146,7 +163,7 @@ pub(crate) unsafe fn product<I: Isa, const MV: usize, const NR: usize, const NMV
     }
 }
 
-/// [`product`] for `n <= NR`: members share out rows; `A` (column-major) is read in place.
+/// [`product`] for `n <= NR` (here the in-place tile's width): members share out rows; `A` (column-major) is read in place.
 #[inline(always)]
 unsafe fn in_place<I: Isa, const MV: usize, const NR: usize>(part: &Part<'_>, p: &Product) {
     let ASource::Columns { ptr: a, ld } = p.a else {

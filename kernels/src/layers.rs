@@ -69,7 +69,14 @@ unsafe impl Sync for InputGradJob<'_> {}
 /// The job's slices hold their shapes, its pointers are writable for them, and the caller is
 /// compiled for `I`.
 #[inline(always)]
-pub(crate) unsafe fn forward_part<I: Isa, const MV: usize, const NR: usize, const NMV: usize>(
+pub(crate) unsafe fn forward_part<
+    I: Isa,
+    const MV: usize,
+    const NR: usize,
+    const NMV: usize,
+    const WMV: usize,
+    const WNR: usize,
+>(
     part: &Part<'_>,
     job: &ForwardJob<'_>,
 ) {
@@ -99,7 +106,7 @@ pub(crate) unsafe fn forward_part<I: Isa, const MV: usize, const NR: usize, cons
             relu: job.relu,
         },
     };
-    unsafe { product::<I, MV, NR, NMV>(part, &p) };
+    unsafe { product::<I, MV, NR, NMV, WMV, WNR>(part, &p) };
 }
 
 /// # Safety
@@ -110,6 +117,8 @@ pub(crate) unsafe fn weight_grad_part<
     const MV: usize,
     const NR: usize,
     const NMV: usize,
+    const WMV: usize,
+    const WNR: usize,
 >(
     part: &Part<'_>,
     job: &BackwardJob<'_>,
@@ -167,13 +176,20 @@ pub(crate) unsafe fn weight_grad_part<
             epilogue: Epilogue::Accumulate,
         }
     };
-    unsafe { product::<I, MV, NR, NMV>(part, &p) };
+    unsafe { product::<I, MV, NR, NMV, WMV, WNR>(part, &p) };
 }
 
 /// # Safety
 /// As [`forward_part`].
 #[inline(always)]
-pub(crate) unsafe fn input_grad_part<I: Isa, const MV: usize, const NR: usize, const NMV: usize>(
+pub(crate) unsafe fn input_grad_part<
+    I: Isa,
+    const MV: usize,
+    const NR: usize,
+    const NMV: usize,
+    const WMV: usize,
+    const WNR: usize,
+>(
     part: &Part<'_>,
     job: &InputGradJob<'_>,
 ) {
@@ -199,5 +215,5 @@ pub(crate) unsafe fn input_grad_part<I: Isa, const MV: usize, const NR: usize, c
             None => Epilogue::Store,
         },
     };
-    unsafe { product::<I, MV, NR, NMV>(part, &p) };
+    unsafe { product::<I, MV, NR, NMV, WMV, WNR>(part, &p) };
 }

@@ -15,6 +15,8 @@
 //! - `isa.rs`: the vector operations everything is written in, implemented by `avx512.rs`
 //!   and `avx2.rs`; `scratch.rs`: per-thread packing memory; `cache.rs`: the L2 size.
 //! - [`fma_peak`]: the core's measured FMA peak.
+//! - `examples/layer_rates.rs`: each product of Lunar Lander's critic timed alone, for tuning
+//!   tile shapes without building the service.
 //!
 //! ## Numerics
 //!
@@ -47,7 +49,7 @@ use team::Part;
 /// The instruction sets the kernels are compiled for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Isa {
-    /// AVX-512F: 16 lanes, 32 x 12 tiles.
+    /// AVX-512F: 16 lanes, 48 x 8 tiles.
     Avx512,
     /// AVX2 + FMA: 8 lanes, 16 x 6 tiles.
     Avx2,

@@ -69,7 +69,9 @@ fn layer_outputs(
 
 /// `(n_in, n_out, batch)`. The last three are large enough to be shared out over threads on
 /// the dot-product and narrow paths.
-const SHAPES: [(usize, usize, usize); 16] = [
+const SHAPES: [(usize, usize, usize); 17] = [
+    // A full row tile and a short one of two vectors (70 = 48 + 22 rows on AVX-512).
+    (24, 70, 20),
     (10, 400, 64),
     (400, 300, 37),
     (300, 1, 50),
