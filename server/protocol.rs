@@ -227,6 +227,12 @@ pub fn parse_client(text: &str) -> Result<ClientMessage, ProtocolError> {
         })
     };
     Ok(match wire {
+        WireClientMessage::Answer { value, .. } if !value.is_single() => {
+            return Err(ProtocolError::new(
+                ErrorCode::BadMessage,
+                "a trainer answers 1, 0, -1, \"left\", \"right\", \"equal\" or \"skip\"; means and tallies are what the server combines",
+            ));
+        }
         WireClientMessage::Answer { id, value } => ClientMessage::Answer {
             id: query(id)?,
             value,
@@ -306,6 +312,13 @@ mod tests {
                 .code,
             ErrorCode::BadMessage
         );
+        for combined in [
+            r#"0.5"#,
+            r#"{"tally":{"left":1,"right":1,"equal":0,"skip":0}}"#,
+        ] {
+            let text = format!(r#"{{"type":"answer","id":1,"value":{combined}}}"#);
+            assert_eq!(parse_client(&text).unwrap_err().code, ErrorCode::BadMessage);
+        }
         assert_eq!(
             id_of(r#"{"type":"answer","id":12,"value":"maybe"}"#),
             Some(12)

@@ -15,10 +15,16 @@ use crate::guidance::drpl::run::PreferenceRunConfig;
 use crate::guidance::drpl::selection::QueryMethod;
 use crate::guidance::evaluative_run::EvaluativeRunConfig;
 use crate::guidance::feedback_schedule::EvaluativeMethod;
+use crate::guidance::human_pace::HumanPace;
 use crate::guidance::query_rule::UcbForm;
 use crate::rl::{ActorMix, HumanCriticConfig, SacConfig};
 use crate::scene_graph::SceneGraph;
 use crate::sim::{EnvOptions, GripObservation, PlacingSuccess, Task, Variant};
+
+mod people;
+
+pub use crate::session::combine::Combine;
+pub use people::{NeverWord, RationalWord, TeacherBeta, TeacherSkip};
 
 /// A human session's control rate when the researcher does not set `pace_hz`: the robot's own.
 pub const DEFAULT_PACE_HZ: f64 = 20.0;
@@ -77,6 +83,30 @@ pub struct Settings {
     /// Also stream the session to a running Rerun viewer at this URL.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rerun_connect: Option<String>,
+    /// Answers each query takes from different named trainers [default 1].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub answers_per_query: Option<usize>,
+    /// How a query's answers combine: `first` (one answer, the first), `majority` or `mean`
+    /// (evaluative), `each` (preference: every answer its own observation).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub combine: Option<Combine>,
+
+    // ---- the synthetic teacher's faults (algorithms.md section 4, after B-Pref) ------------
+    /// Boltzmann rationality: a number, or `rational` (never errs by chance) [default].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub teacher_beta: Option<TeacherBeta>,
+    /// Myopic discount in (0, 1] [default 1: not myopic].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub teacher_gamma: Option<f64>,
+    /// Probability that an answer is flipped [default 0].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub teacher_error: Option<f64>,
+    /// Skip what is worth less than this: a number, or `never` [default].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub teacher_skip: Option<TeacherSkip>,
+    /// Answer "about equal" (evaluative: 0) below this margin [default 0].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub teacher_equal: Option<f64>,
 
     // ---- SAC (algorithms.md section 1) ---------------------------------------------------
     /// Hidden layer sizes of the actor and every critic, e.g. `[256, 256]` or `"256,256"`.
@@ -135,6 +165,10 @@ pub struct Settings {
     /// The learner stores `reward_scale * r`; reported returns keep the env's scale.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reward_scale: Option<f32>,
+    /// A person's pace: at most this many queries in any minute at `pace_hz` (0: no limit,
+    /// the paper's behaviour) [default 0].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_queries_per_minute: Option<u32>,
 
     // ---- the scene graph -----------------------------------------------------------------
     /// Lunar Lander: test both side engines on a0, as the authors' code does.
@@ -218,6 +252,10 @@ pub struct SessionSettings {
     pub record: bool,
     /// Also stream to a running Rerun viewer at this URL (else the server's `--rerun-connect`).
     pub rerun_connect: Option<String>,
+    /// Answers each query takes (from different named trainers).
+    pub answers_per_query: usize,
+    /// How they combine.
+    pub combine: Combine,
 }
 
 impl Settings {
@@ -282,6 +320,7 @@ impl Settings {
         if self.rerun_connect.as_deref() == Some("") {
             return Err("rerun_connect: expected a viewer URL, got an empty string".into());
         }
+        let (answers_per_query, combine) = people::answers(self.answers_per_query, self.combine)?;
         Ok(SessionSettings {
             pace_hz,
             answer_timeout_s: positive(
@@ -301,6 +340,8 @@ impl Settings {
             )? as usize,
             record: self.record.unwrap_or(true),
             rerun_connect: self.rerun_connect.clone(),
+            answers_per_query,
+            combine,
         })
     }
 
@@ -313,6 +354,8 @@ impl Settings {
             clip_frames,
             record,
             rerun_connect,
+            answers_per_query,
+            combine,
             ..
         } = self;
         [
@@ -322,6 +365,8 @@ impl Settings {
             ("clip_frames", clip_frames.is_some()),
             ("record", record.is_some()),
             ("rerun_connect", rerun_connect.is_some()),
+            ("answers_per_query", answers_per_query.is_some()),
+            ("combine", combine.is_some()),
         ]
         .into_iter()
         .filter(|(_, set)| *set)
@@ -346,6 +391,13 @@ impl Settings {
             clip_frames: _,
             record: _,
             rerun_connect: _,
+            answers_per_query: _,
+            combine: _,
+            teacher_beta: _,
+            teacher_gamma: _,
+            teacher_error: _,
+            teacher_skip: _,
+            teacher_equal: _,
             hidden,
             learning_rate,
             batch_size,
@@ -364,6 +416,7 @@ impl Settings {
             k,
             ucb,
             reward_scale,
+            max_queries_per_minute,
             side_engines_on_a0,
             variant,
             success,
@@ -453,6 +506,11 @@ impl Settings {
             config.query_rule.form = *form;
         }
         set_positive(&mut config.reward_scale, *reward_scale, "reward_scale")?;
+        if let Some(n) = max_queries_per_minute.filter(|n| *n > 0) {
+            let pace_hz = self.session()?.pace_hz;
+            config.human_pace = Some(HumanPace::new(n, pace_hz));
+        }
+        config.teacher = people::teacher_faults(self)?;
         apply_scene_graph(&mut config.scene_graph, *side_engines_on_a0)?;
         apply_env(
             &mut config.env,
@@ -481,6 +539,13 @@ impl Settings {
             clip_frames: _,
             record: _,
             rerun_connect: _,
+            answers_per_query: _,
+            combine: _,
+            teacher_beta: _,
+            teacher_gamma: _,
+            teacher_error: _,
+            teacher_skip: _,
+            teacher_equal: _,
             hidden,
             learning_rate,
             batch_size,
@@ -499,6 +564,7 @@ impl Settings {
             k,
             ucb,
             reward_scale,
+            max_queries_per_minute,
             side_engines_on_a0,
             variant,
             success,
@@ -534,6 +600,7 @@ impl Settings {
             ("k", k.is_some()),
             ("ucb", ucb.is_some()),
             ("reward_scale", reward_scale.is_some()),
+            ("max_queries_per_minute", max_queries_per_minute.is_some()),
         ];
         if let Some((key, _)) = evaluative_only.iter().find(|(_, set)| *set) {
             return Err(format!(
@@ -581,6 +648,7 @@ impl Settings {
         if let Some(n) = at_least("samples", *samples, 1)? {
             belief.samples = n;
         }
+        config.teacher = people::teacher_faults(self)?;
         apply_scene_graph(&mut config.scene_graph, *side_engines_on_a0)?;
         apply_env(
             &mut config.env,
@@ -629,7 +697,9 @@ impl Settings {
             checkpoint_every: Some(DEFAULT_CHECKPOINT_EVERY),
             clip_frames: Some(DEFAULT_CLIP_FRAMES),
             record: Some(true),
-            ..Settings::default()
+            answers_per_query: Some(1),
+            combine: Some(Combine::First),
+            ..people::teacher_defaults()
         };
         let table_top = task != Task::LunarLander;
         let placing = task == Task::Placing;
@@ -664,6 +734,7 @@ impl Settings {
                     k: Some(c.query_rule.k),
                     ucb: Some(c.query_rule.form),
                     reward_scale: Some(c.reward_scale),
+                    max_queries_per_minute: Some(0),
                     side_engines_on_a0,
                     variant: table_top.then_some(c.env.variant),
                     success: placing.then(|| c.env.placing_success()),

@@ -20,7 +20,8 @@ use crate::guidance::drpl::features;
 use crate::guidance::drpl::pool::Clip;
 use crate::guidance::drpl::run::{PreferenceRun, PreferenceRunConfig, QueryReport};
 use crate::guidance::drpl::selection::QueryMethod;
-use crate::guidance::drpl::trainer::{Preference, SyntheticOracle};
+use crate::guidance::drpl::simulated_teacher::SimulatedTeacher;
+use crate::guidance::drpl::trainer::Preference;
 use crate::sim::Task;
 
 #[derive(Debug, Args)]
@@ -154,7 +155,12 @@ pub fn run(args: PrefsArgs) -> anyhow::Result<()> {
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let start = Instant::now();
     let mut run = PreferenceRun::new(config.clone());
-    let mut oracle = SyntheticOracle::new(run.theta_true().to_vec());
+    let mut oracle = SimulatedTeacher::new(
+        run.theta_true().to_vec(),
+        config.teacher,
+        run.teacher_seed(),
+        run.pool(),
+    );
     let graph = config.scene_graph;
 
     let csv_path = args.out.join("alignment.csv");

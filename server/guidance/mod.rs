@@ -5,6 +5,9 @@
 //! - `feedback_schedule`: which steps ask, per method (DREF, EF-p%, SAC).
 //! - `evaluative_trainer`: the `EvaluativeTrainer` trait (synthetic oracle or a person) and H.
 //! - `expert_oracle`: the synthetic trainer, a SAC expert's critic judging the learner's action.
+//! - `teacher`: simulated teachers' faults after B-Pref (Boltzmann rationality, myopia, errors,
+//!   skip and "about equal" thresholds), shared by both synthetic oracles.
+//! - `human_pace`: at most N queries a minute, for people (the query rule still picks which).
 //! - `evaluative_run`: one SAC / EF-p% / DREF run, step by step, and policy evaluation; its
 //!   `run_checkpoint` saves a whole run between episodes so a long one resumes bit for bit.
 //! - `drpl`: what to ask: DRPL's scene-graph segments and pairs, its baselines, the belief over
@@ -16,4 +19,6 @@ pub mod evaluative_run;
 pub mod evaluative_trainer;
 pub mod expert_oracle;
 pub mod feedback_schedule;
+pub mod human_pace;
 pub mod query_rule;
+pub mod teacher;

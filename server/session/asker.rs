@@ -6,9 +6,8 @@ use std::collections::VecDeque;
 use std::path::Path;
 use std::sync::Arc;
 
-use crate::guidance::drpl::trainer::{
-    Preference, PreferenceQuery, PreferenceTrainer, SyntheticOracle,
-};
+use crate::guidance::drpl::simulated_teacher::SimulatedTeacher;
+use crate::guidance::drpl::trainer::{Preference, PreferenceQuery, PreferenceTrainer};
 use crate::guidance::drpl::trajectories::Trajectory;
 use crate::guidance::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
 use crate::rl::Sac;
@@ -243,7 +242,8 @@ pub(super) enum Comparer {
         trajectories: Vec<Trajectory>,
     },
     Synthetic {
-        oracle: SyntheticOracle,
+        /// Boxed: a myopic teacher carries a copy of the pool's features.
+        oracle: Box<SimulatedTeacher>,
         graph: SceneGraph,
     },
 }

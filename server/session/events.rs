@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::guidance::drpl::trainer::Preference;
 use crate::guidance::evaluative_run::EpisodeRecord;
-use crate::guidance::evaluative_trainer::Evaluation;
+use crate::guidance::evaluative_trainer::{Evaluation, MeanLabel};
 use crate::scene_graph::AbstractState;
 use crate::sim::{Geometry, RenderState};
 
@@ -68,23 +68,29 @@ impl Answerer {
 }
 
 /// A trainer's answer as the websocket carries it: `1 | 0 | -1` or `"left" | "right" | "equal" |
-/// "skip"`.
+/// "skip"`; and what several trainers' answers combine into (`session::combine`): a mean such
+/// as `0.5`, or a tally `{"tally": {"left": 2, ...}}`, which no trainer sends.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(untagged)]
 pub enum AnswerValue {
     Evaluation(i8),
     Preference(Preference),
+    Mean(MeanLabel),
 }
 
 impl AnswerValue {
     pub fn evaluation(e: Evaluation) -> Self {
-        AnswerValue::Evaluation(e.value() as i8)
+        match e {
+            Evaluation::Mean(m) => AnswerValue::Mean(m),
+            e => AnswerValue::Evaluation(e.value() as i8),
+        }
     }
 
     /// The evaluative answer, if this is one with a valid value.
     pub fn as_evaluation(self) -> Option<Evaluation> {
         match self {
             AnswerValue::Evaluation(v) => Evaluation::from_value(i64::from(v)),
+            AnswerValue::Mean(m) => Some(Evaluation::Mean(m)),
             AnswerValue::Preference(_) => None,
         }
     }
@@ -92,8 +98,24 @@ impl AnswerValue {
     pub fn as_preference(self) -> Option<Preference> {
         match self {
             AnswerValue::Preference(p) => Some(p),
-            AnswerValue::Evaluation(_) => None,
+            AnswerValue::Evaluation(_) | AnswerValue::Mean(_) => None,
         }
+    }
+
+    /// Whether one trainer can give this answer (combined values cannot be sent).
+    pub fn is_single(self) -> bool {
+        !matches!(
+            self,
+            AnswerValue::Mean(_) | AnswerValue::Preference(Preference::Tally(_))
+        )
+    }
+
+    /// "No feedback" or a skip: what the paper counts in NFC.
+    pub fn is_no_feedback(self) -> bool {
+        matches!(
+            self,
+            AnswerValue::Evaluation(0) | AnswerValue::Preference(Preference::Skip)
+        )
     }
 
     /// Whether this value answers a query of `kind`.
@@ -116,6 +138,10 @@ impl AnswerValue {
     pub fn as_number(self) -> f64 {
         match self {
             AnswerValue::Evaluation(v) => f64::from(v),
+            AnswerValue::Mean(m) => f64::from(m.value()),
+            AnswerValue::Preference(Preference::Tally(t)) => {
+                (f64::from(t.left) - f64::from(t.right)) / f64::from(t.total().max(1))
+            }
             AnswerValue::Preference(Preference::Left) => 1.0,
             AnswerValue::Preference(Preference::Right) => -1.0,
             AnswerValue::Preference(_) => 0.0,

@@ -3,12 +3,14 @@
 //!
 //! - `spec`: what a session is (task, method, trainer kind, seed, budget, parameters).
 //! - `events`: what the loop reports and the controls it obeys; answer values.
+//! - `combine`: how several trainers' answers to one query become the one the learner takes.
 //! - `query`: what a person is shown (clips, predicates).
 //! - `asker`: who answers: stored answers, people through the control channel, or a synthetic
 //!   trainer; the observer sees every query and answer.
 //! - `runner`: the loop: pacing, frames, asking, replaying stored answers, checkpoints.
 
 mod asker;
+pub mod combine;
 pub mod events;
 pub mod query;
 pub mod runner;

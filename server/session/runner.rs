@@ -9,8 +9,8 @@ use std::time::{Duration, Instant};
 
 use crate::guidance::drpl::pool::QueryPool;
 use crate::guidance::drpl::run::PreferenceRun;
+use crate::guidance::drpl::simulated_teacher::SimulatedTeacher;
 use crate::guidance::drpl::trainer::Preference;
-use crate::guidance::drpl::trainer::SyntheticOracle;
 use crate::guidance::drpl::trajectories::Trajectory;
 use crate::guidance::evaluative_run::EvaluativeRun;
 use crate::guidance::evaluative_trainer::{Evaluation, NoTrainer};
@@ -156,7 +156,14 @@ fn run_evaluative(
                 _ => {
                     let expert = load_task_expert(ctx.models_dir.as_deref(), spec.task)?;
                     let act_dim = run.env().spec().action_space.dim();
-                    Box::new(ExpertOracle::new(expert, act_dim, OracleRule::Authors))
+                    let config = run.config();
+                    Box::new(
+                        ExpertOracle::new(expert, act_dim, OracleRule::Authors).with_faults(
+                            config.teacher,
+                            config.seed,
+                            f64::from(config.sac.gamma),
+                        ),
+                    )
                 }
             },
             graph: run.config().scene_graph,
@@ -323,7 +330,12 @@ fn run_preference(
             trajectories,
         },
         TrainerKind::Synthetic => Comparer::Synthetic {
-            oracle: SyntheticOracle::new(run.theta_true().to_vec()),
+            oracle: Box::new(SimulatedTeacher::new(
+                run.theta_true().to_vec(),
+                run.config().teacher,
+                run.teacher_seed(),
+                run.pool(),
+            )),
             graph: run.config().scene_graph,
         },
     };
