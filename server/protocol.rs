@@ -7,10 +7,11 @@
 use serde::{Deserialize, Serialize};
 
 use crate::scene_graph::Predicate;
+pub use crate::session::combine::Combine;
 pub use crate::session::{AnswerValue, Answerer, QueryKind};
 use crate::session::{Frame, QueryContent};
 use crate::sim::{Geometry, Task};
-use crate::store::Status;
+use crate::store::{Status, TrainerRef};
 
 /// A query's id on the wire: the session's own query number (0 for its first query), the
 /// order in which the session asked it. Answers, acks, withdrawals and errors name queries by
@@ -38,6 +39,13 @@ pub enum ServerMessage {
         /// Steps per second the session runs at while people watch (the page paces its
         /// drawing by it).
         pace_hz: f64,
+        /// The named trainer this connection answers as (absent: anonymous, or a researcher).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        trainer: Option<TrainerRef>,
+        /// Answers each query takes from different named trainers (1: the first one wins).
+        answers_per_query: usize,
+        /// How they combine: `first`, `majority`, `mean` or `each`.
+        combine: Combine,
     },
     Frame(Frame),
     /// Boxed: a query (with its clips) is far larger than the other messages.
@@ -137,7 +145,9 @@ impl WithdrawReason {
     pub fn answered_by(who: Answerer) -> Self {
         match who {
             Answerer::Timeout => WithdrawReason::Expired,
-            Answerer::Trainer | Answerer::Synthetic => WithdrawReason::Answered,
+            Answerer::Trainer | Answerer::Trainers | Answerer::Synthetic => {
+                WithdrawReason::Answered
+            }
         }
     }
 }
@@ -166,6 +176,9 @@ pub enum ErrorCode {
     RateLimited,
     /// The session is not running; answers are closed.
     SessionEnded,
+    /// The session takes several answers per query from named trainers: this connection has
+    /// no name (open your own link, or join with a name).
+    IdentityRequired,
 }
 
 /// Why a client message was refused.

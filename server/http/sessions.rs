@@ -326,7 +326,7 @@ pub async fn export(
 /// answers to the three questions, once the session has ended.
 pub async fn survey(
     State(state): State<AppState>,
-    SessionAccess(r): SessionAccess,
+    SessionAccess(r, who): SessionAccess,
     body: Result<Json<Survey>, JsonRejection>,
 ) -> ApiResult<Json<SessionView>> {
     let id = r.id.clone();
@@ -337,7 +337,15 @@ pub async fn survey(
             "the questions come after the session has ended".into(),
         ));
     }
-    state.store.save_survey(&id, &survey).await?;
+    match who.trainer_id() {
+        Some(trainer) => {
+            state
+                .store
+                .save_trainer_survey(trainer, &id, &survey)
+                .await?
+        }
+        None => state.store.save_survey(&id, &survey).await?,
+    }
     Ok(Json(view(&state, r).await?))
 }
 

@@ -17,7 +17,7 @@ use crate::sim::{EnvOptions, Task};
 use super::events::{
     AnswerValue, Controls, Observer, QueryKind, Revision, SessionEvent, SessionSink, StoredRevision,
 };
-use super::query::{self, FrameHistory, QueryContent};
+use super::query::{self, FrameHistory, QueryContent, QueryData, SegmentData};
 use super::runner::SessionContext;
 
 /// Load an expert written by `dualrep expert` (the synthetic evaluative trainer consults it).
@@ -122,7 +122,7 @@ impl Asker {
         abstract_state: u32,
         kind: QueryKind,
         describe: String,
-        content: impl FnOnce() -> QueryContent,
+        content: impl FnOnce() -> (QueryContent, QueryData),
     ) -> Option<AnswerValue> {
         let seq = self.seq;
         self.seq += 1;
@@ -134,11 +134,13 @@ impl Asker {
             self.aborted = true;
             return None;
         }
+        let (content, data) = content();
         self.sink.send(SessionEvent::Query {
             seq,
             step,
             abstract_state,
-            content: Box::new(content()),
+            content: Box::new(content),
+            data: Box::new(data),
         });
         match self.controls.wait_answer(seq) {
             Ok(v) => Some(self.answered(step, seq, v)),
@@ -157,6 +159,7 @@ impl Asker {
         kind: QueryKind,
         describe: String,
         value: AnswerValue,
+        data: QueryData,
     ) {
         self.replay.pop_front();
         let seq = self.seq;
@@ -168,6 +171,7 @@ impl Asker {
             abstract_state,
             kind,
             value,
+            data: Box::new(data),
         });
         self.seq += 1;
     }
@@ -202,11 +206,14 @@ impl EvaluativeTrainer for EvaluativeAsker {
                     q.abstract_state.0,
                     QueryKind::Evaluative,
                     describe_evaluative(graph, q),
-                    || QueryContent::Evaluative {
-                        clip: history.clip().expect("the history starts with the episode"),
-                        action: q.action.to_vec(),
-                        holding: graph.holding(q.abstract_state),
-                        predicted: q.predicted,
+                    || {
+                        let content = QueryContent::Evaluative {
+                            clip: history.clip().expect("the history starts with the episode"),
+                            action: q.action.to_vec(),
+                            holding: graph.holding(q.abstract_state),
+                            predicted: q.predicted,
+                        };
+                        (content, transition(q))
                     },
                 )
                 .and_then(AnswerValue::as_evaluation)
@@ -225,6 +232,7 @@ impl EvaluativeTrainer for EvaluativeAsker {
                     QueryKind::Evaluative,
                     describe,
                     AnswerValue::evaluation(e),
+                    transition(q),
                 );
                 e
             }
@@ -269,22 +277,25 @@ impl PreferenceTrainer for PreferenceAsker {
                     state,
                     QueryKind::Preference,
                     describe_preference(graph, q),
-                    || QueryContent::Preference {
-                        left: query::render_clip(
-                            *task,
-                            env,
-                            &trajectories[q.left.trajectory],
-                            q.left,
-                        ),
-                        right: query::render_clip(
-                            *task,
-                            env,
-                            &trajectories[q.right.trajectory],
-                            q.right,
-                        ),
-                        left_holding: query::holding(graph, q.left.abstract_state),
-                        right_holding: query::holding(graph, q.right.abstract_state),
-                        predicate: q.predicate.map(|i| graph.predicates()[i]),
+                    || {
+                        let content = QueryContent::Preference {
+                            left: query::render_clip(
+                                *task,
+                                env,
+                                &trajectories[q.left.trajectory],
+                                q.left,
+                            ),
+                            right: query::render_clip(
+                                *task,
+                                env,
+                                &trajectories[q.right.trajectory],
+                                q.right,
+                            ),
+                            left_holding: query::holding(graph, q.left.abstract_state),
+                            right_holding: query::holding(graph, q.right.abstract_state),
+                            predicate: q.predicate.map(|i| graph.predicates()[i]),
+                        };
+                        (content, segments(q))
                     },
                 )
                 .and_then(AnswerValue::as_preference)
@@ -302,10 +313,29 @@ impl PreferenceTrainer for PreferenceAsker {
                     QueryKind::Preference,
                     describe,
                     AnswerValue::Preference(p),
+                    segments(q),
                 );
                 p
             }
         }
+    }
+}
+
+/// An evaluative query's transition, for datasets.
+fn transition(q: &EvaluativeQuery<'_>) -> QueryData {
+    QueryData::Evaluative {
+        observation: q.obs.to_vec(),
+        action: q.action.to_vec(),
+        reward: q.reward,
+        next_observation: q.next_obs.to_vec(),
+    }
+}
+
+/// A preference query's two segments, for datasets.
+fn segments(q: &PreferenceQuery<'_>) -> QueryData {
+    QueryData::Preference {
+        left: SegmentData::of(q.left),
+        right: SegmentData::of(q.right),
     }
 }
 

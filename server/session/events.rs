@@ -13,7 +13,7 @@ use crate::guidance::evaluative_trainer::{Evaluation, MeanLabel};
 use crate::scene_graph::AbstractState;
 use crate::sim::{Geometry, RenderState};
 
-use super::query::QueryContent;
+use super::query::{QueryContent, QueryData};
 
 /// Which answers a query takes: a +1 / 0 / -1 judgement (DREF, EF) or a preference between two
 /// segments (DRPL and the other preference methods).
@@ -45,6 +45,8 @@ impl QueryKind {
 pub enum Answerer {
     /// A person, through the websocket.
     Trainer,
+    /// Several named trainers: their answers combined (`combine` = majority, mean or each).
+    Trainers,
     /// The session's synthetic trainer (an expert oracle or a reward).
     Synthetic,
     /// Nobody: the answer timeout gave "no feedback" (or skipped the pair).
@@ -55,15 +57,21 @@ impl Answerer {
     pub fn as_str(self) -> &'static str {
         match self {
             Answerer::Trainer => "trainer",
+            Answerer::Trainers => "trainers",
             Answerer::Synthetic => "synthetic",
             Answerer::Timeout => "timeout",
         }
     }
 
     pub fn parse(s: &str) -> Option<Self> {
-        [Answerer::Trainer, Answerer::Synthetic, Answerer::Timeout]
-            .into_iter()
-            .find(|k| k.as_str() == s)
+        [
+            Answerer::Trainer,
+            Answerer::Trainers,
+            Answerer::Synthetic,
+            Answerer::Timeout,
+        ]
+        .into_iter()
+        .find(|k| k.as_str() == s)
     }
 }
 
@@ -201,6 +209,8 @@ pub enum SessionEvent {
         step: u64,
         abstract_state: u32,
         content: Box<QueryContent>,
+        /// What the learner saw (stored for datasets).
+        data: Box<QueryData>,
     },
     /// A synthetic trainer's query and answer together (nobody waits).
     Answered {
@@ -209,6 +219,7 @@ pub enum SessionEvent {
         abstract_state: u32,
         kind: QueryKind,
         value: AnswerValue,
+        data: Box<QueryData>,
     },
     Episode(EpisodeRecord),
     /// A preference session's posterior after an answer.

@@ -21,6 +21,6 @@ pub use events::{
     AnswerValue, Answerer, Checkpoint, Control, Controls, Ending, Frame, Observer, QueryKind,
     Revision, SessionEvent, SessionSink, StoredRevision,
 };
-pub use query::{Clip, QueryContent};
+pub use query::{Clip, QueryContent, QueryData, SegmentData};
 pub use runner::{SessionContext, digest, run_session};
 pub use spec::{SessionMethod, SessionSettings, SessionSpec, TrainerKind};

@@ -8,6 +8,8 @@
 //! - `episodes`: finished episodes' metrics.
 //! - `checkpoints`: where a session was, and the learner's digest.
 //! - `surveys`: the trainer's answers to the paper's three questions.
+//! - `trainers`: named trainers, each one's own answers (sessions that combine several per
+//!   query) and surveys.
 //! - `alignments`: a preference session's alignment after every answer.
 
 /// The current time as the RFC 3339 text every table stores (UTC, milliseconds), as a literal
@@ -26,6 +28,7 @@ mod queries;
 mod revisions;
 mod sessions;
 mod surveys;
+mod trainers;
 
 use std::path::Path;
 use std::str::FromStr;
@@ -41,6 +44,9 @@ pub use queries::{AnswerCounts, AnswerRow, CommitOutcome, QueryRow, SyntheticAns
 pub use revisions::{ReanswerOutcome, UndoOutcome};
 pub use sessions::{NewSession, SessionRow, Status};
 pub use surveys::Survey;
+pub use trainers::{
+    AddTrainer, PersonAnswer, TrainerOrigin, TrainerRef, TrainerRow, VoteOutcome, check_name,
+};
 
 /// The database file inside the data dir.
 pub const DB_FILE: &str = "dualrep.db";
