@@ -8,12 +8,14 @@
 //! - `teacher`: simulated teachers' faults after B-Pref (Boltzmann rationality, myopia, errors,
 //!   skip and "about equal" thresholds), shared by both synthetic oracles.
 //! - `human_pace`: at most N queries a minute, for people (the query rule still picks which).
+//! - `agreement`: how much trainers agree (Krippendorff's alpha, Fleiss' kappa).
 //! - `evaluative_run`: one SAC / EF-p% / DREF run, step by step, and policy evaluation; its
 //!   `run_checkpoint` saves a whole run between episodes so a long one resumes bit for bit.
 //! - `drpl`: what to ask: DRPL's scene-graph segments and pairs, its baselines, the belief over
 //!   the reward weights (APReL's sampling-based belief), acquisition, the synthetic preference
 //!   oracle and the preference run.
 
+pub mod agreement;
 pub mod drpl;
 pub mod evaluative_run;
 pub mod evaluative_trainer;

@@ -3,6 +3,8 @@
 //! closed unless origins are configured.
 //!
 //! - `sessions`: launch, list, inspect, stop, resume, episodes, answers, export.
+//! - `trainers`: named trainers (invite, join by name), the per-trainer breakdown, agreement;
+//!   `trainer_views` builds those views.
 //! - `tasks`, `openapi`: self-description.
 //! - `auth`, `error`: the bearer check and the JSON error shape.
 
@@ -11,6 +13,8 @@ pub mod error;
 pub mod openapi;
 pub mod sessions;
 pub mod tasks;
+pub mod trainer_views;
+pub mod trainers;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -61,10 +65,16 @@ pub fn app(state: AppState) -> Router {
         .route("/api/sessions/{id}/alignment", get(sessions::alignment))
         .route("/api/sessions/{id}/export", get(sessions::export))
         .route("/api/sessions/{id}/recording.rrd", get(recording))
+        .route(
+            "/api/sessions/{id}/trainers",
+            post(trainers::invite).get(trainers::list),
+        )
+        .route("/api/sessions/{id}/agreement", get(trainers::agreement_of))
         .route_layer(middleware::from_extractor_with_state::<auth::Researcher, _>(state.clone()));
     let mut router = Router::new()
         .merge(researcher)
         .route("/api/sessions/{id}/survey", post(sessions::survey))
+        .route("/api/sessions/{id}/join", post(trainers::join))
         .route("/api/tasks", get(tasks::tasks))
         .route("/api/openapi.json", get(openapi::openapi))
         .route("/api/{*rest}", any(api_not_found))

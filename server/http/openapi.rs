@@ -5,7 +5,7 @@ use axum::Json;
 use serde_json::{Value, json};
 
 /// Every documented operation as `(method, path)`; the test compares it with the router's.
-pub const OPERATIONS: [(&str, &str); 16] = [
+pub const OPERATIONS: [(&str, &str); 20] = [
     ("post", "/api/sessions"),
     ("get", "/api/sessions"),
     ("get", "/api/sessions/{id}"),
@@ -18,6 +18,10 @@ pub const OPERATIONS: [(&str, &str); 16] = [
     ("get", "/api/sessions/{id}/export"),
     ("get", "/api/sessions/{id}/recording.rrd"),
     ("post", "/api/sessions/{id}/survey"),
+    ("post", "/api/sessions/{id}/trainers"),
+    ("get", "/api/sessions/{id}/trainers"),
+    ("post", "/api/sessions/{id}/join"),
+    ("get", "/api/sessions/{id}/agreement"),
     ("get", "/api/tasks"),
     ("get", "/api/openapi.json"),
     ("get", "/healthz"),
@@ -119,6 +123,40 @@ pub fn document() -> Value {
             "responses": ok("The session, with `survey`", session_ref.clone()),
         },
     }));
+    paths.insert("/api/sessions/{id}/trainers".into(), json!({
+        "parameters": id_param(),
+        "post": {
+            "summary": "Invite a named trainer: a link of their own (its token identifies them)",
+            "requestBody": {"required": true, "content": {"application/json": {"schema": {"$ref": "#/components/schemas/Name"}}}},
+            "responses": {
+                "201": {"description": "The trainer and their link", "content": {"application/json": {"schema": {"$ref": "#/components/schemas/TrainerLink"}}}},
+                "default": {"$ref": "#/components/responses/Error"}
+            }
+        },
+        "get": op("The session per trainer: answers, time (T), no-feedback count (NFC), latency, survey; the anonymous trainer last", true, ok("Trainers", json!({"type": "array", "items": {"$ref": "#/components/schemas/TrainerStats"}}))),
+    }));
+    paths.insert("/api/sessions/{id}/join".into(), json!({
+        "parameters": id_param(),
+        "post": {
+            "summary": "A trainer on the session's shared link gives their name and gets a token of their own; bearer = the session's trainer token",
+            "security": [],
+            "requestBody": {"required": true, "content": {"application/json": {"schema": {"$ref": "#/components/schemas/Name"}}}},
+            "responses": {
+                "201": {"description": "Joined", "content": {"application/json": {"schema": {"$ref": "#/components/schemas/TrainerLink"}}}},
+                "default": {"$ref": "#/components/responses/Error"}
+            }
+        },
+    }));
+    paths.insert("/api/sessions/{id}/agreement".into(), json!({
+        "parameters": id_param(),
+        "get": op("How much the named trainers agree: Krippendorff's alpha (ordinal) over evaluative answers, Fleiss' kappa over preference choices; per session and per pair of trainers", true, ok("Agreement", json!({"type": "object", "properties": {
+            "measure": {"type": "string", "enum": ["krippendorff_alpha_ordinal", "fleiss_kappa"]},
+            "value": {"type": ["number", "null"]}, "units": {"type": "integer"}, "trainers": {"type": "integer"},
+            "pairs": {"type": "array", "items": {"type": "object", "properties": {
+                "a": {"type": "integer"}, "b": {"type": "integer"}, "a_name": {"type": "string"}, "b_name": {"type": "string"},
+                "value": {"type": ["number", "null"]}, "units": {"type": "integer"}}}}
+        }}))),
+    }));
     paths.insert("/api/tasks".into(), json!({
         "get": op("Tasks, their scene-graph predicates and defaults", false, ok("Tasks", json!({"type": "object"}))),
     }));
@@ -187,11 +225,26 @@ pub fn document() -> Value {
                 "Answer": {"type": "object", "required": ["query_id", "kind", "step", "value", "answered_at", "latency_ms"], "properties": {
                     "query_id": {"type": "integer"}, "seq": {"type": "integer"}, "kind": {"type": "string", "enum": ["evaluative", "preference"]},
                     "step": {"type": "integer"}, "abstract_state": {"type": "integer"},
-                    "value": {"oneOf": [{"type": "integer", "enum": [1, 0, -1]}, {"type": "string", "enum": ["left", "right", "equal", "skip"]}]},
-                    "who": {"type": "string", "enum": ["trainer", "synthetic", "timeout"]},
+                    "value": {"oneOf": [{"type": "integer", "enum": [1, 0, -1]}, {"type": "string", "enum": ["left", "right", "equal", "skip"]},
+                        {"type": "number", "description": "several trainers' mean (combine = mean)"},
+                        {"type": "object", "description": "several trainers' preferences (combine = each)", "properties": {"tally": {"type": "object"}}}]},
+                    "who": {"type": "string", "enum": ["trainer", "trainers", "synthetic", "timeout"]},
+                    "trainer": {"type": ["string", "null"], "description": "the named trainer who gave it"},
+                    "trainer_id": {"type": ["integer", "null"]},
                     "asked_at": {"type": "string"}, "answered_at": {"type": "string"}, "latency_ms": {"type": "integer"},
                     "revision": {"type": "integer", "description": "how often an undo changed the answer (0: never); `value` is the answer that stands"}
                 }},
+                "Name": {"type": "object", "required": ["name"], "additionalProperties": false,
+                    "properties": {"name": {"type": "string", "minLength": 1, "maxLength": 40}}},
+                "TrainerLink": {"type": "object", "properties": {
+                    "id": {"type": "integer"}, "name": {"type": "string"}, "origin": {"type": "string", "enum": ["invited", "joined"]},
+                    "token": {"type": "string"}, "trainer_url": {"type": "string"}}},
+                "TrainerStats": {"type": "object", "properties": {
+                    "id": {"type": ["integer", "null"]}, "name": {"type": ["string", "null"]}, "origin": {"type": ["string", "null"]},
+                    "trainer_url": {"type": "string"}, "answers": {"type": "integer"}, "no_feedback": {"type": "integer"},
+                    "trainer_seconds": {"type": ["number", "null"]}, "latency_ms_median": {"type": ["number", "null"]},
+                    "latency_ms_mean": {"type": ["number", "null"]},
+                    "survey": {"oneOf": [{"$ref": "#/components/schemas/Survey"}, {"type": "null"}]}}},
                 "Episode": {"type": "object", "properties": {
                     "episode": {"type": "integer"}, "step": {"type": "integer"}, "return": {"type": "number"}, "length": {"type": "integer"},
                     "cumulative_return": {"type": "number"}, "feedback_count": {"type": "integer"}, "feedback_fraction": {"type": "number"},

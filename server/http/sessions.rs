@@ -231,7 +231,8 @@ pub struct ExportQuery {
 }
 
 /// `GET .../export?format=jsonl|csv`: JSONL holds the session, then every answer and episode,
-/// one record per line (`"record"` names it); CSV holds the answers.
+/// each trainer's summary and own answers, and the trainers' agreement, one record per line
+/// (`"record"` names it); CSV holds the answers, with the trainer who gave each.
 pub async fn export(
     State(state): State<AppState>,
     Path(id): Path<String>,
@@ -260,6 +261,22 @@ pub async fn export(
             for e in state.store.episodes(&id).await? {
                 line("episode", serde_json::to_value(&e).unwrap_or_default());
             }
+            // Per trainer, each one's own answers, and how much they agree.
+            for t in super::trainers::breakdown(&state, &id).await? {
+                line("trainer", serde_json::to_value(&t).unwrap_or_default());
+            }
+            for a in state.store.person_answers(&id).await? {
+                line(
+                    "trainer_answer",
+                    serde_json::to_value(&a).unwrap_or_default(),
+                );
+            }
+            let row = super::trainers::session_row(&state, &id).await?;
+            let agreement = super::trainers::session_agreement(&state, &row).await?;
+            line(
+                "agreement",
+                serde_json::to_value(&agreement).unwrap_or_default(),
+            );
             (out, "application/x-ndjson", "jsonl")
         }
         "csv" => {
@@ -272,6 +289,7 @@ pub async fn export(
                 "abstract_state",
                 "value",
                 "who",
+                "trainer",
                 "asked_at",
                 "answered_at",
                 "latency_ms",
@@ -287,6 +305,7 @@ pub async fn export(
                     a.abstract_state.to_string(),
                     value.trim_matches('"').to_string(),
                     a.who.as_str().to_string(),
+                    a.trainer.clone().unwrap_or_default(),
                     a.asked_at.clone(),
                     a.answered_at.clone(),
                     a.latency_ms.to_string(),
@@ -322,8 +341,9 @@ pub async fn export(
         .into_response())
 }
 
-/// `POST /api/sessions/{id}/survey`: the trainer (its session token) or a researcher stores the
-/// answers to the three questions, once the session has ended.
+/// `POST /api/sessions/{id}/survey`: the trainer (the session's shared token, or a named
+/// trainer's own, who then answers for themself) or a researcher stores the answers to the
+/// three questions, once the session has ended.
 pub async fn survey(
     State(state): State<AppState>,
     SessionAccess(r, who): SessionAccess,
