@@ -190,7 +190,8 @@ pub struct Checkpoint {
     /// Queries answered so far (all of them replayable from the store).
     pub answers: u64,
     pub digest: String,
-    /// The learner's safetensors bytes (evaluative sessions).
+    /// The learner's safetensors bytes (evaluative sessions) or the posterior's (preference
+    /// sessions), written to `<data dir>/checkpoints/<id>.safetensors`.
     pub weights: Option<Vec<u8>>,
 }
 

@@ -8,6 +8,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crate::guidance::drpl::pool::QueryPool;
+use crate::guidance::drpl::posterior_file::posterior_safetensors;
 use crate::guidance::drpl::run::PreferenceRun;
 use crate::guidance::drpl::simulated_teacher::SimulatedTeacher;
 use crate::guidance::drpl::trainer::Preference;
@@ -307,11 +308,13 @@ fn preference_checkpoint(run: &PreferenceRun) -> Checkpoint {
         .iter()
         .flat_map(|x| x.to_le_bytes())
         .collect();
+    let names = crate::guidance::drpl::features::names(run.config().task);
     Checkpoint {
         progress: run.queries() as u64,
         answers: run.queries() as u64,
         digest: digest(&mean),
-        weights: None,
+        // The posterior, for `GET .../posterior.safetensors` and `dualrep export`.
+        weights: Some(posterior_safetensors(run.belief(), names, run.queries())),
     }
 }
 
@@ -347,9 +350,9 @@ fn run_preference(
     };
     while (run.queries() as u64) < spec.budget {
         if let Some(h) = trainer.asker.controls.poll() {
-            if h == Halt::Shutdown {
-                sink.send(SessionEvent::Checkpoint(preference_checkpoint(&run)));
-            }
+            // Between queries the posterior is whole: keep it (a stopped session's too, so its
+            // posterior can be exported).
+            sink.send(SessionEvent::Checkpoint(preference_checkpoint(&run)));
             return Ok(halt_ending(h));
         }
         let progress = run.queries() as u64;

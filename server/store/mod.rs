@@ -7,6 +7,7 @@
 //! - `answer_revisions`: undos and the answers given after them.
 //! - `episodes`: finished episodes' metrics.
 //! - `checkpoints`: where a session was, and the learner's digest.
+//! - `datasets`: answered queries with what the learner saw, for Parquet exports.
 //! - `surveys`: the trainer's answers to the paper's three questions.
 //! - `trainers`: named trainers, each one's own answers (sessions that combine several per
 //!   query) and surveys.
@@ -23,6 +24,7 @@ macro_rules! now {
 mod alignments;
 mod checkpoints;
 mod columns;
+mod datasets;
 mod episodes;
 mod queries;
 mod revisions;
@@ -39,6 +41,7 @@ use sqlx::sqlite::SqliteConnectOptions;
 
 pub use alignments::AlignmentRow;
 pub use checkpoints::CheckpointRow;
+pub use datasets::DatasetRow;
 pub use episodes::EpisodeRow;
 pub use queries::{AnswerCounts, AnswerRow, CommitOutcome, QueryRow, SyntheticAnswer};
 pub use revisions::{ReanswerOutcome, UndoOutcome};

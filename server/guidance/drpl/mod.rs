@@ -12,11 +12,13 @@
 //!   belief: softmax user, uniform prior on the ball, Metropolis-Hastings).
 //! - `acquisition`: how a query is scored among candidates (uniform, APReL's mutual information).
 //! - `run`: one run, query by query.
+//! - `posterior_file`: the posterior (samples and mean theta) as safetensors for other tools.
 
 pub mod acquisition;
 pub mod belief;
 pub mod features;
 pub mod pool;
+pub mod posterior_file;
 pub mod run;
 pub mod segments;
 pub mod selection;
