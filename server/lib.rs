@@ -17,9 +17,9 @@
 //! - [`rl`]: MLPs on nalgebra with a hand-written backward pass, Adam, losses, the
 //!   tanh-squashed Gaussian policy, the replay buffer, and SAC with DREF's twin human critic
 //!   (checkpoints as safetensors bytes).
-//! - [`guidance`]: when to ask (DREF's UCB query rule, EF-p%), who answers (the
-//!   `EvaluativeTrainer` trait, the expert oracle), the evaluative training loop; later, what
-//!   to ask (DRPL).
+//! - [`guidance`]: when to ask (DREF's UCB query rule, EF-p%, a person's pace), who answers
+//!   (the `EvaluativeTrainer` trait, the expert oracle, simulated teachers' faults), the
+//!   evaluative training loop, what to ask (DRPL), and how much trainers agree.
 //! - [`settings`]: every setting by name as one typed list (`Settings`), read by launch
 //!   requests, `--set`/TOML, `GET /api/tasks` and the dashboard; validated once.
 //! - [`session`]: one training session as a plain loop on its own thread, talking to the
@@ -37,6 +37,8 @@
 //! - [`http`]: REST routes, auth, errors, the web UI's files; [`ws`]: the trainer websocket and
 //!   its typed protocol.
 //! - [`shipped`]: the web UI and the shipped experts, carried inside the binary.
+//! - [`export`]: a session's datasets for other tools: transitions or preference pairs as
+//!   Parquet, the policy as safetensors.
 //! - [`record`]: the Rerun recording of a session (scene per step, rewards, predicates,
 //!   queries and answers on `step` and `episode` timelines) to an `.rrd` file and/or a live
 //!   viewer, from a logging thread behind a bounded channel.
@@ -44,9 +46,10 @@
 //!   Slurm job array tasks (one executor trait, two implementations), aggregation over seeds,
 //!   `table.md`, SVG and PNG figures (aggregation and tables are pure functions).
 //! - [`cli`]: the `dualrep` command line: `serve`, `sim`, `train`, `prefs`, `expert`,
-//!   `reproduce`, `bench`, `loadtest`.
+//!   `reproduce`, `export`, `bench`, `loadtest`.
 
 pub mod cli;
+pub mod export;
 pub mod guidance;
 pub mod http;
 pub mod hub;

@@ -5,10 +5,12 @@
 //! - `sessions`: launch, list, inspect, stop, resume, episodes, answers, export.
 //! - `trainers`: named trainers (invite, join by name), the per-trainer breakdown, agreement;
 //!   `trainer_views` builds those views.
+//! - `datasets`: a session's Parquet table, posterior and policy files.
 //! - `tasks`, `openapi`: self-description.
 //! - `auth`, `error`: the bearer check and the JSON error shape.
 
 pub mod auth;
+pub mod datasets;
 pub mod error;
 pub mod openapi;
 pub mod sessions;
@@ -70,6 +72,15 @@ pub fn app(state: AppState) -> Router {
             post(trainers::invite).get(trainers::list),
         )
         .route("/api/sessions/{id}/agreement", get(trainers::agreement_of))
+        .route("/api/sessions/{id}/dataset.parquet", get(datasets::dataset))
+        .route(
+            "/api/sessions/{id}/posterior.safetensors",
+            get(datasets::posterior),
+        )
+        .route(
+            "/api/sessions/{id}/policy.safetensors",
+            get(datasets::policy),
+        )
         .route_layer(middleware::from_extractor_with_state::<auth::Researcher, _>(state.clone()));
     let mut router = Router::new()
         .merge(researcher)

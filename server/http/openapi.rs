@@ -5,7 +5,7 @@ use axum::Json;
 use serde_json::{Value, json};
 
 /// Every documented operation as `(method, path)`; the test compares it with the router's.
-pub const OPERATIONS: [(&str, &str); 20] = [
+pub const OPERATIONS: [(&str, &str); 23] = [
     ("post", "/api/sessions"),
     ("get", "/api/sessions"),
     ("get", "/api/sessions/{id}"),
@@ -22,6 +22,9 @@ pub const OPERATIONS: [(&str, &str); 20] = [
     ("get", "/api/sessions/{id}/trainers"),
     ("post", "/api/sessions/{id}/join"),
     ("get", "/api/sessions/{id}/agreement"),
+    ("get", "/api/sessions/{id}/dataset.parquet"),
+    ("get", "/api/sessions/{id}/posterior.safetensors"),
+    ("get", "/api/sessions/{id}/policy.safetensors"),
     ("get", "/api/tasks"),
     ("get", "/api/openapi.json"),
     ("get", "/healthz"),
@@ -157,6 +160,34 @@ pub fn document() -> Value {
                 "value": {"type": ["number", "null"]}, "units": {"type": "integer"}}}}
         }}))),
     }));
+    for (file, summary, media) in [
+        (
+            "dataset.parquet",
+            "The session's labelled data as Parquet: each answered query's transition (observation, action, reward, next observation, label, who, latency; evaluative sessions) or pair (both segments' features and abstract states, the choice, who, latency; preference sessions), with each named trainer's own answer",
+            "application/vnd.apache.parquet",
+        ),
+        (
+            "posterior.safetensors",
+            "A preference session's posterior at its latest checkpoint: `samples` [n, d] and `mean_theta` [d], f64",
+            "application/octet-stream",
+        ),
+        (
+            "policy.safetensors",
+            "An evaluative session's policy at its latest checkpoint: the actor network's tensors, f32, PyTorch layout",
+            "application/octet-stream",
+        ),
+    ] {
+        paths.insert(
+            format!("/api/sessions/{{id}}/{file}"),
+            json!({
+                "parameters": id_param(),
+                "get": op(summary, true, json!({
+                    "200": {"description": "The file", "content": {media: {}}},
+                    "default": {"$ref": "#/components/responses/Error"}
+                })),
+            }),
+        );
+    }
     paths.insert("/api/tasks".into(), json!({
         "get": op("Tasks, their scene-graph predicates and defaults", false, ok("Tasks", json!({"type": "object"}))),
     }));

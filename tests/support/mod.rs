@@ -3,6 +3,7 @@
 pub mod binary;
 pub mod cli;
 pub mod counting_alloc;
+pub mod pyarrow_py;
 pub mod rerun_py;
 pub mod server;
 pub mod slurm_cluster;
