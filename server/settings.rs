@@ -19,7 +19,7 @@ use crate::guidance::human_pace::HumanPace;
 use crate::guidance::query_rule::UcbForm;
 use crate::rl::{ActorMix, HumanCriticConfig, SacConfig};
 use crate::scene_graph::SceneGraph;
-use crate::sim::{EnvOptions, GripObservation, PlacingSuccess, Task, Variant};
+use crate::sim::{EnvOptions, GripObservation, PlacingSuccess, Start, Task, Variant};
 
 mod people;
 
@@ -36,7 +36,7 @@ pub const DEFAULT_CHECKPOINT_EVERY: u64 = 5_000;
 pub const DEFAULT_CLIP_FRAMES: usize = 30;
 
 /// Which runs a setting shapes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Family {
     /// SAC, EF-p% and DREF (`dualrep train`, evaluative sessions).
@@ -46,7 +46,7 @@ pub enum Family {
 }
 
 /// SAC's target entropy: SB3's `-dim(A)` ("auto") or a number.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(untagged)]
 pub enum TargetEntropy {
     Auto(AutoWord),
@@ -54,14 +54,14 @@ pub enum TargetEntropy {
 }
 
 /// The word `auto`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum AutoWord {
     Auto,
 }
 
 /// Every setting by name. `None` keeps the default for the run's task and method.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Settings {
     // ---- the session (the server's human and synthetic sessions) -------------------------
@@ -179,6 +179,10 @@ pub struct Settings {
     /// `authors` (home pose, 1.2 cm steps, gradual gripper) or `uniform` (the first version).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub variant: Option<Variant>,
+    /// Where episodes start: `home` (the authors' variant) or `uniform` (anywhere over the
+    /// table; the first version, and DRPL's random trajectories as in the paper).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start: Option<Start>,
     /// Placing: `over` (released over the opening) or `through` (fallen through it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub success: Option<PlacingSuccess>,
@@ -419,6 +423,7 @@ impl Settings {
             max_queries_per_minute,
             side_engines_on_a0,
             variant,
+            start,
             success,
             observe_grip,
             release_at,
@@ -515,10 +520,13 @@ impl Settings {
         apply_env(
             &mut config.env,
             task,
-            *variant,
-            *success,
-            *observe_grip,
-            *release_at,
+            EnvSettings {
+                variant: *variant,
+                start: *start,
+                success: *success,
+                observe_grip: *observe_grip,
+                release_at: *release_at,
+            },
         )?;
         Ok(config)
     }
@@ -567,6 +575,7 @@ impl Settings {
             max_queries_per_minute,
             side_engines_on_a0,
             variant,
+            start,
             success,
             observe_grip,
             release_at,
@@ -653,10 +662,13 @@ impl Settings {
         apply_env(
             &mut config.env,
             task,
-            *variant,
-            *success,
-            *observe_grip,
-            *release_at,
+            EnvSettings {
+                variant: *variant,
+                start: *start,
+                success: *success,
+                observe_grip: *observe_grip,
+                release_at: *release_at,
+            },
         )?;
         Ok(config)
     }
@@ -665,6 +677,7 @@ impl Settings {
     pub fn env_options(&self, task: Task) -> Result<EnvOptions, String> {
         let env_only = Settings {
             variant: self.variant,
+            start: self.start,
             success: self.success,
             observe_grip: self.observe_grip,
             release_at: self.release_at,
@@ -672,7 +685,7 @@ impl Settings {
         };
         if &env_only != self {
             return Err(
-                "only the task's version can be set here: variant, success, observe_grip, release_at"
+                "only the task's version can be set here: variant, start, success, observe_grip, release_at"
                     .into(),
             );
         }
@@ -680,10 +693,13 @@ impl Settings {
         apply_env(
             &mut options,
             task,
-            self.variant,
-            self.success,
-            self.observe_grip,
-            self.release_at,
+            EnvSettings {
+                variant: self.variant,
+                start: self.start,
+                success: self.success,
+                observe_grip: self.observe_grip,
+                release_at: self.release_at,
+            },
         )?;
         Ok(options)
     }
@@ -737,6 +753,7 @@ impl Settings {
                     max_queries_per_minute: Some(0),
                     side_engines_on_a0,
                     variant: table_top.then_some(c.env.variant),
+                    start: table_top.then(|| c.env.start_pose()),
                     success: placing.then(|| c.env.placing_success()),
                     observe_grip: placing.then_some(c.env.observe_grip),
                     release_at: placing.then_some(c.env.release_at),
@@ -758,6 +775,7 @@ impl Settings {
                     samples: Some(c.belief.samples),
                     side_engines_on_a0,
                     variant: table_top.then_some(c.env.variant),
+                    start: table_top.then(|| c.env.start_pose()),
                     success: placing.then(|| c.env.placing_success()),
                     observe_grip: placing.then_some(c.env.observe_grip),
                     release_at: placing.then_some(c.env.release_at),
@@ -820,21 +838,37 @@ fn apply_scene_graph(
     }
 }
 
-fn apply_env(
-    env: &mut EnvOptions,
-    task: Task,
+/// The settings of the task's version, as [`apply_env`] takes them.
+struct EnvSettings {
     variant: Option<Variant>,
+    start: Option<Start>,
     success: Option<PlacingSuccess>,
     observe_grip: Option<GripObservation>,
     release_at: Option<f32>,
-) -> Result<(), String> {
-    if let Some(v) = variant {
+}
+
+fn apply_env(env: &mut EnvOptions, task: Task, given: EnvSettings) -> Result<(), String> {
+    let EnvSettings {
+        variant,
+        start,
+        success,
+        observe_grip,
+        release_at,
+    } = given;
+    let table_top_only = |key: &str| -> Result<(), String> {
         if task == Task::LunarLander {
-            return Err(format!(
-                "variant applies to reaching and placing, not {task}"
-            ));
+            Err(format!("{key} applies to reaching and placing, not {task}"))
+        } else {
+            Ok(())
         }
+    };
+    if let Some(v) = variant {
+        table_top_only("variant")?;
         env.variant = v;
+    }
+    if let Some(s) = start {
+        table_top_only("start")?;
+        env.start = Some(s);
     }
     let placing_only = |key: &str| -> Result<(), String> {
         if task == Task::Placing {

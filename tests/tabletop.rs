@@ -5,8 +5,8 @@ use dualrep::sim::placing::{self, Placing};
 use dualrep::sim::reaching::{self, Reaching};
 use dualrep::sim::rollout::{SimplePolicy, run_episodes, run_episodes_with};
 use dualrep::sim::{
-    Env, EnvOptions, Geometry, GripObservation, Outcome, PlacingSuccess, RenderState, Step, Task,
-    Variant,
+    Env, EnvOptions, Geometry, GripObservation, Outcome, PlacingSuccess, RenderState, Start, Step,
+    Task, Variant,
 };
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -51,6 +51,45 @@ fn random_policies_match_the_calibration_targets() {
     );
     let (r, _) = run_episodes(Task::Reaching, SimplePolicy::Random, 200, 0);
     assert!((0.15..=0.45).contains(&r.success_rate), "{r:?}");
+}
+
+/// `start = uniform` moves the authors' tasks' starts anywhere over the table (DRPL's random
+/// trajectories start so, as the paper's did) and keeps their 1.2 cm steps and gradual gripper.
+#[test]
+fn a_uniform_start_spreads_the_authors_tasks_starts_and_keeps_their_dynamics() {
+    let spread_start = EnvOptions {
+        start: Some(Start::Uniform),
+        ..EnvOptions::default()
+    };
+    for task in [Task::Reaching, Task::Placing] {
+        let mut home = task.make_env_with(&EnvOptions::default());
+        let mut anywhere = task.make_env_with(&spread_start);
+        let far_from_home = (0..20)
+            .filter(|&seed| (anywhere.reset(seed)[0] - home.reset(seed)[0]).abs() > 0.1)
+            .count();
+        assert!(
+            far_from_home >= 10,
+            "{task}: {far_from_home} of 20 starts moved"
+        );
+        // One full step along x moves 1.2 cm (unless the gate stops it).
+        let before = anywhere.reset(3);
+        let mut action = vec![0.0; anywhere.spec().action_space.dim()];
+        action[0] = 1.0;
+        if let Some(grip) = action.get_mut(3) {
+            *grip = 1.0; // keep holding the ball
+        }
+        let after = anywhere.step(&action).obs;
+        let moved = after[0] - before[0];
+        assert!(
+            moved == 0.0 || (moved - 0.012).abs() < 1e-4,
+            "{task}: moved {moved}"
+        );
+    }
+    let (s, _) = run_episodes_with(Task::Placing, &spread_start, SimplePolicy::Random, 100, 0);
+    assert!(
+        s.success_rate > 0.0,
+        "random releases over the opening now happen: {s:?}"
+    );
 }
 
 // ---------------------------------------------------------------- Placing: the ball

@@ -17,7 +17,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::scene_graph::AbstractState;
 
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum UcbForm {
     /// `mean |H - H_hat| + c sqrt(2 N / (N(g) + 1))`, as in the authors' code.

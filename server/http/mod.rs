@@ -24,12 +24,15 @@ use std::sync::Arc;
 use axum::extract::{Path, State};
 use axum::http::{HeaderValue, Method, StatusCode, header};
 use axum::response::{IntoResponse, Response};
-use axum::routing::{any, get, post};
-use axum::{Json, Router, middleware};
+use axum::routing::{any, get};
+use axum::{Extension, Json, Router, middleware};
 use tower_http::cors::CorsLayer;
 use tower_http::limit::RequestBodyLimitLayer;
 use tower_http::services::{ServeDir, ServeFile};
 use tower_http::trace::TraceLayer;
+use utoipa::OpenApi;
+use utoipa_axum::router::OpenApiRouter;
+use utoipa_axum::routes;
 
 use crate::hub::Hub;
 use crate::store::Store;
@@ -52,45 +55,54 @@ pub struct AppState {
     pub cors_origins: Vec<HeaderValue>,
 }
 
+/// Every documented route, before the state is supplied: the researcher routes (behind the
+/// bearer token in [`app`]) and the public ones. The OpenAPI document is generated from these.
+pub(crate) fn api_routes() -> OpenApiRouter<AppState> {
+    OpenApiRouter::with_openapi(openapi::ApiDoc::openapi())
+        .merge(researcher_routes())
+        .merge(public_routes())
+}
+
+fn researcher_routes() -> OpenApiRouter<AppState> {
+    OpenApiRouter::new()
+        .routes(routes!(sessions::create, sessions::list))
+        .routes(routes!(sessions::get))
+        .routes(routes!(sessions::stop))
+        .routes(routes!(sessions::resume))
+        .routes(routes!(sessions::episodes))
+        .routes(routes!(sessions::episode_frames))
+        .routes(routes!(sessions::answers))
+        .routes(routes!(sessions::alignment))
+        .routes(routes!(sessions::export))
+        .routes(routes!(recording))
+        .routes(routes!(trainers::invite, trainers::list))
+        .routes(routes!(trainers::agreement_of))
+        .routes(routes!(datasets::dataset))
+        .routes(routes!(datasets::posterior))
+        .routes(routes!(datasets::policy))
+}
+
+fn public_routes() -> OpenApiRouter<AppState> {
+    OpenApiRouter::new()
+        .routes(routes!(sessions::survey))
+        .routes(routes!(trainers::join))
+        .routes(routes!(tasks::tasks))
+        .routes(routes!(openapi::openapi))
+        .routes(routes!(healthz))
+        .routes(routes!(crate::ws::socket::upgrade))
+}
+
 pub fn app(state: AppState) -> Router {
-    let researcher = Router::new()
-        .route("/api/sessions", post(sessions::create).get(sessions::list))
-        .route("/api/sessions/{id}", get(sessions::get))
-        .route("/api/sessions/{id}/stop", post(sessions::stop))
-        .route("/api/sessions/{id}/resume", post(sessions::resume))
-        .route("/api/sessions/{id}/episodes", get(sessions::episodes))
-        .route(
-            "/api/sessions/{id}/episodes/{episode}/frames",
-            get(sessions::episode_frames),
-        )
-        .route("/api/sessions/{id}/answers", get(sessions::answers))
-        .route("/api/sessions/{id}/alignment", get(sessions::alignment))
-        .route("/api/sessions/{id}/export", get(sessions::export))
-        .route("/api/sessions/{id}/recording.rrd", get(recording))
-        .route(
-            "/api/sessions/{id}/trainers",
-            post(trainers::invite).get(trainers::list),
-        )
-        .route("/api/sessions/{id}/agreement", get(trainers::agreement_of))
-        .route("/api/sessions/{id}/dataset.parquet", get(datasets::dataset))
-        .route(
-            "/api/sessions/{id}/posterior.safetensors",
-            get(datasets::posterior),
-        )
-        .route(
-            "/api/sessions/{id}/policy.safetensors",
-            get(datasets::policy),
-        )
+    let researcher = researcher_routes()
         .route_layer(middleware::from_extractor_with_state::<auth::Researcher, _>(state.clone()));
-    let mut router = Router::new()
+    let (router, doc) = OpenApiRouter::with_openapi(openapi::ApiDoc::openapi())
         .merge(researcher)
-        .route("/api/sessions/{id}/survey", post(sessions::survey))
-        .route("/api/sessions/{id}/join", post(trainers::join))
-        .route("/api/tasks", get(tasks::tasks))
-        .route("/api/openapi.json", get(openapi::openapi))
+        .merge(public_routes())
+        .split_for_parts();
+    let doc = Arc::new(serde_json::to_value(doc).expect("the OpenAPI document serialises"));
+    let mut router = router
         .route("/api/{*rest}", any(api_not_found))
-        .route("/healthz", get(healthz))
-        .route("/ws/sessions/{id}", get(crate::ws::socket::upgrade));
+        .layer(Extension(doc));
     router = match &state.web_dir {
         Some(web) => router
             .route_service("/train/{id}", ServeFile::new(web.join("train.html")))
@@ -137,6 +149,17 @@ async fn api_not_found() -> ApiError {
     ApiError::NotFound("no such API route; see /api/openapi.json".into())
 }
 
+/// Liveness and a database check.
+#[utoipa::path(
+    get,
+    path = "/healthz",
+    tag = "service",
+    security(()),
+    responses(
+        (status = 200, description = "Healthy: `{\"status\": \"ok\"}`", body = Object),
+        (status = 503, description = "The database does not answer", body = openapi::ErrorBody)
+    )
+)]
 async fn healthz(State(state): State<AppState>) -> Response {
     match state.store.ping().await {
         Ok(()) => Json(serde_json::json!({"status": "ok"})).into_response(),
@@ -145,6 +168,16 @@ async fn healthz(State(state): State<AppState>) -> Response {
 }
 
 /// `<data dir>/recordings/<id>.rrd`, written by the session's recorder.
+#[utoipa::path(
+    get,
+    path = "/api/sessions/{id}/recording.rrd",
+    tag = "sessions",
+    params(("id" = String, Path, description = "The session")),
+    responses(
+        (status = 200, description = "The session's Rerun recording (open with `rerun <file>`)", content_type = "application/octet-stream", body = Vec<u8>),
+        (status = "default", description = "An error", body = openapi::ErrorBody)
+    )
+)]
 async fn recording(State(state): State<AppState>, Path(id): Path<String>) -> ApiResult<Response> {
     if state.store.session(&id).await?.is_none() {
         return Err(ApiError::NotFound(format!("no session {id}")));

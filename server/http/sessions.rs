@@ -10,17 +10,20 @@ use serde::{Deserialize, Serialize};
 use super::AppState;
 use super::auth::SessionAccess;
 use super::error::{ApiError, ApiResult};
+use super::openapi::ErrorBody;
 use crate::session::spec::DEFAULT_QUERIES;
 use crate::session::{SessionMethod, SessionSpec, TrainerKind};
 use crate::settings::Settings;
 use crate::sim::Task;
-use crate::store::{AnswerCounts, SessionRow, Status, Survey};
+use crate::store::{AlignmentRow, AnswerCounts, AnswerRow, EpisodeRow, SessionRow, Status, Survey};
 
-/// `POST /api/sessions`.
-#[derive(Debug, Deserialize)]
+/// What to train, how, with whom, and for how long.
+#[derive(Debug, Deserialize, utoipa::ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LaunchRequest {
     pub task: Task,
+    /// dref, ef-<percent> (ef-100, ef-50, ef-6.2, ...), sac, drpl, drpl-ss, fragment or full.
+    #[schema(value_type = String, example = "dref")]
     pub method: SessionMethod,
     pub trainer: TrainerKind,
     #[serde(default)]
@@ -30,11 +33,21 @@ pub struct LaunchRequest {
     /// Queries (preference methods) [default: 40].
     pub queries: Option<u64>,
     /// Session settings and hyper-parameters by name (`GET /api/tasks` lists them with their
-    /// defaults), read into [`Settings`] by [`LaunchRequest::into_spec`]: a setting that is
-    /// unknown, of the wrong type or out of range makes an invalid session (422), not a
-    /// malformed request.
+    /// defaults). A setting that is unknown, of the wrong type or out of range makes an invalid
+    /// session (422).
+    // Read into `Settings` by `into_spec`, so that a bad setting is a 422, not a malformed body.
     #[serde(default)]
+    #[schema(value_type = Option<Settings>)]
     pub params: serde_json::Value,
+}
+
+/// A launched session.
+#[derive(Debug, Serialize, utoipa::ToSchema)]
+pub struct Launched {
+    pub id: String,
+    pub status: Status,
+    /// The trainer's link (path and per-session token), relative to the server.
+    pub trainer_url: String,
 }
 
 impl LaunchRequest {
@@ -76,7 +89,7 @@ impl LaunchRequest {
 }
 
 /// A session as the API shows it.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, utoipa::ToSchema)]
 pub struct SessionView {
     pub id: String,
     pub task: String,
@@ -90,9 +103,12 @@ pub struct SessionView {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,
     pub progress: i64,
+    /// The settings it was launched with.
+    #[schema(value_type = Settings)]
     pub params: serde_json::Value,
     pub answers: AnswerCounts,
     /// The latest metrics: answered, feedback fraction, recent returns, alignment.
+    #[schema(value_type = Object)]
     pub latest: serde_json::Value,
     pub trainer_url: String,
     pub created_at: String,
@@ -152,10 +168,21 @@ async fn row(state: &AppState, id: &str) -> ApiResult<SessionRow> {
         .ok_or_else(|| ApiError::NotFound(format!("no session {id}")))
 }
 
+/// Launch a session: it queues, then runs on its own thread when a slot is free.
+#[utoipa::path(
+    post,
+    path = "/api/sessions",
+    tag = "sessions",
+    request_body = LaunchRequest,
+    responses(
+        (status = 201, description = "Queued", body = Launched),
+        (status = "default", description = "An error", body = ErrorBody)
+    )
+)]
 pub async fn create(
     State(state): State<AppState>,
     body: Result<Json<LaunchRequest>, JsonRejection>,
-) -> ApiResult<(StatusCode, Json<serde_json::Value>)> {
+) -> ApiResult<(StatusCode, Json<Launched>)> {
     let Json(request) = body.map_err(|e| match e.status() {
         StatusCode::PAYLOAD_TOO_LARGE => ApiError::PayloadTooLarge(super::MAX_BODY_BYTES),
         _ => ApiError::BadRequest(e.body_text()),
@@ -165,10 +192,21 @@ pub async fn create(
     let status = state.hub.status_of(&row);
     Ok((
         StatusCode::CREATED,
-        Json(serde_json::json!({"id": row.id, "status": status, "trainer_url": trainer_url(&row)})),
+        Json(Launched {
+            trainer_url: trainer_url(&row),
+            id: row.id,
+            status,
+        }),
     ))
 }
 
+/// Every session, newest first.
+#[utoipa::path(
+    get,
+    path = "/api/sessions",
+    tag = "sessions",
+    responses((status = 200, description = "Sessions", body = Vec<SessionView>), (status = "default", description = "An error", body = ErrorBody))
+)]
 pub async fn list(State(state): State<AppState>) -> ApiResult<Json<Vec<SessionView>>> {
     let mut out = Vec::new();
     for r in state.store.sessions().await? {
@@ -177,6 +215,14 @@ pub async fn list(State(state): State<AppState>) -> ApiResult<Json<Vec<SessionVi
     Ok(Json(out))
 }
 
+/// A session: status, progress, answer counts, latest metrics.
+#[utoipa::path(
+    get,
+    path = "/api/sessions/{id}",
+    tag = "sessions",
+    params(("id" = String, Path, description = "The session")),
+    responses((status = 200, description = "The session", body = SessionView), (status = "default", description = "An error", body = ErrorBody))
+)]
 pub async fn get(
     State(state): State<AppState>,
     Path(id): Path<String>,
@@ -185,6 +231,14 @@ pub async fn get(
     Ok(Json(view(&state, r).await?))
 }
 
+/// Stop a queued or running session.
+#[utoipa::path(
+    post,
+    path = "/api/sessions/{id}/stop",
+    tag = "sessions",
+    params(("id" = String, Path, description = "The session")),
+    responses((status = 200, description = "The session", body = SessionView), (status = "default", description = "An error", body = ErrorBody))
+)]
 pub async fn stop(
     State(state): State<AppState>,
     Path(id): Path<String>,
@@ -194,6 +248,15 @@ pub async fn stop(
     Ok(Json(view(&state, r).await?))
 }
 
+/// Resume an interrupted, stopped or failed session; stored answers are replayed, never
+/// asked again.
+#[utoipa::path(
+    post,
+    path = "/api/sessions/{id}/resume",
+    tag = "sessions",
+    params(("id" = String, Path, description = "The session")),
+    responses((status = 200, description = "The session", body = SessionView), (status = "default", description = "An error", body = ErrorBody))
+)]
 pub async fn resume(
     State(state): State<AppState>,
     Path(id): Path<String>,
@@ -202,6 +265,14 @@ pub async fn resume(
     Ok(Json(view(&state, r).await?))
 }
 
+/// The session's finished episodes.
+#[utoipa::path(
+    get,
+    path = "/api/sessions/{id}/episodes",
+    tag = "sessions",
+    params(("id" = String, Path, description = "The session")),
+    responses((status = 200, description = "Episodes", body = Vec<EpisodeRow>), (status = "default", description = "An error", body = ErrorBody))
+)]
 pub async fn episodes(
     State(state): State<AppState>,
     Path(id): Path<String>,
@@ -210,13 +281,28 @@ pub async fn episodes(
     Ok(Json(state.store.episodes(&id).await?).into_response())
 }
 
+/// Answered queries in the order asked.
+#[utoipa::path(
+    get,
+    path = "/api/sessions/{id}/answers",
+    tag = "sessions",
+    params(("id" = String, Path, description = "The session")),
+    responses((status = 200, description = "Answers", body = Vec<AnswerRow>), (status = "default", description = "An error", body = ErrorBody))
+)]
 pub async fn answers(State(state): State<AppState>, Path(id): Path<String>) -> ApiResult<Response> {
     row(&state, &id).await?;
     Ok(Json(state.store.answers(&id).await?).into_response())
 }
 
 /// `GET .../alignment`: a preference session's posterior alignment after every answer (and
-/// after every undo), oldest first.
+/// after every undo), oldest first (empty for evaluative sessions).
+#[utoipa::path(
+    get,
+    path = "/api/sessions/{id}/alignment",
+    tag = "sessions",
+    params(("id" = String, Path, description = "The session")),
+    responses((status = 200, description = "Alignment by query", body = Vec<AlignmentRow>), (status = "default", description = "An error", body = ErrorBody))
+)]
 pub async fn alignment(
     State(state): State<AppState>,
     Path(id): Path<String>,
@@ -225,14 +311,28 @@ pub async fn alignment(
     Ok(Json(state.store.alignment(&id).await?).into_response())
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, utoipa::IntoParams)]
 pub struct ExportQuery {
+    /// `jsonl` (default) or `csv`.
     pub format: Option<String>,
 }
 
 /// `GET .../export?format=jsonl|csv`: JSONL holds the session, then every answer and episode,
 /// each trainer's summary and own answers, and the trainers' agreement, one record per line
 /// (`"record"` names it); CSV holds the answers, with the trainer who gave each.
+#[utoipa::path(
+    get,
+    path = "/api/sessions/{id}/export",
+    tag = "sessions",
+    params(("id" = String, Path, description = "The session"), ExportQuery),
+    responses(
+        (status = 200, description = "JSONL: the session, then every answer and episode, each trainer's summary (`trainer`) and own answers (`trainer_answer`), and their agreement (`agreement`), one record per line (`record` names it); CSV: the answers, with the trainer who gave each", content(
+            (String = "application/x-ndjson"),
+            (String = "text/csv")
+        )),
+        (status = "default", description = "An error", body = ErrorBody)
+    )
+)]
 pub async fn export(
     State(state): State<AppState>,
     Path(id): Path<String>,
@@ -344,6 +444,15 @@ pub async fn export(
 /// `POST /api/sessions/{id}/survey`: the trainer (the session's shared token, or a named
 /// trainer's own, who then answers for themself) or a researcher stores the answers to the
 /// three questions, once the session has ended.
+#[utoipa::path(
+    post,
+    path = "/api/sessions/{id}/survey",
+    tag = "trainers",
+    params(("id" = String, Path, description = "The session")),
+    security(("bearer" = [])),
+    request_body = Survey,
+    responses((status = 200, description = "The session, with `survey` (bearer: the session's trainer token, a named trainer's own token, or the researcher token; a named trainer's answers are theirs, `GET .../trainers`)", body = SessionView), (status = "default", description = "An error", body = ErrorBody))
+)]
 pub async fn survey(
     State(state): State<AppState>,
     SessionAccess(r, who): SessionAccess,
@@ -371,6 +480,13 @@ pub async fn survey(
 
 /// `GET .../episodes/{n}/frames`: an episode of a human session as `{geometry, frames}`, for
 /// replay in the review page.
+#[utoipa::path(
+    get,
+    path = "/api/sessions/{id}/episodes/{episode}/frames",
+    tag = "sessions",
+    params(("id" = String, Path, description = "The session"), ("episode" = u64, Path, description = "The episode, from 0")),
+    responses((status = 200, description = "`{geometry, frames}`", body = Object), (status = "default", description = "An error", body = ErrorBody))
+)]
 pub async fn episode_frames(
     State(state): State<AppState>,
     Path((id, episode)): Path<(String, u64)>,

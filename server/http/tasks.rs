@@ -45,6 +45,15 @@ pub fn describe() -> Value {
     })
 }
 
+/// The tasks, their spaces, scene-graph predicates and budgets, and per method family every
+/// setting that applies, at its default.
+#[utoipa::path(
+    get,
+    path = "/api/tasks",
+    tag = "service",
+    security(()),
+    responses((status = 200, description = "Tasks", body = Object))
+)]
 pub async fn tasks() -> Json<Value> {
     Json(describe())
 }

@@ -11,7 +11,7 @@ use crate::session::{AnswerValue, QueryKind};
 use crate::store::{PersonAnswer, Survey, TrainerOrigin, TrainerRow};
 
 /// One trainer's share of a session.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, utoipa::ToSchema)]
 pub struct TrainerStats {
     /// `null`: the anonymous trainer (answers on the shared link without a name, or stored
     /// before names existed).
@@ -107,7 +107,7 @@ pub fn personal_url(session_id: &str, token: &str) -> String {
 }
 
 /// Agreement between two trainers.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, utoipa::ToSchema)]
 pub struct PairAgreement {
     pub a: i64,
     pub b: i64,
@@ -119,7 +119,7 @@ pub struct PairAgreement {
 }
 
 /// How much a session's named trainers agree.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, utoipa::ToSchema)]
 pub struct AgreementView {
     /// `krippendorff_alpha_ordinal` (evaluative answers) or `fleiss_kappa` (preferences).
     pub measure: &'static str,

@@ -12,20 +12,21 @@ use serde::{Deserialize, Serialize};
 use super::AppState;
 use super::auth::SessionAccess;
 use super::error::{ApiError, ApiResult};
+use super::openapi::ErrorBody;
 use super::trainer_views::{AgreementView, TrainerStats, agreement, personal_url, trainer_stats};
 use crate::hub::{Identity, random_hex};
 use crate::session::QueryKind;
 use crate::store::{AddTrainer, SessionRow, TrainerOrigin, TrainerRow, check_name};
 
 /// `POST .../trainers` and `POST .../join`.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, utoipa::ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct NameRequest {
     pub name: String,
 }
 
 /// A named trainer and their own link (the token in it is theirs alone).
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, utoipa::ToSchema)]
 pub struct TrainerLink {
     pub id: i64,
     pub name: String,
@@ -80,6 +81,17 @@ async fn add(
 }
 
 /// `POST /api/sessions/{id}/trainers` (researcher): invite a named trainer.
+#[utoipa::path(
+    post,
+    path = "/api/sessions/{id}/trainers",
+    tag = "trainers",
+    params(("id" = String, Path, description = "The session")),
+    request_body = NameRequest,
+    responses(
+        (status = 201, description = "The trainer and their own link", body = TrainerLink),
+        (status = "default", description = "An error (409: the name is taken)", body = ErrorBody)
+    )
+)]
 pub async fn invite(
     State(state): State<AppState>,
     Path(id): Path<String>,
@@ -93,6 +105,18 @@ pub async fn invite(
 
 /// `POST /api/sessions/{id}/join` (the session's shared trainer token): a trainer names
 /// themself and gets a token of their own. A named trainer's own token gets their record back.
+#[utoipa::path(
+    post,
+    path = "/api/sessions/{id}/join",
+    tag = "trainers",
+    params(("id" = String, Path, description = "The session")),
+    security(("bearer" = [])),
+    request_body = NameRequest,
+    responses(
+        (status = 201, description = "Joined: the trainer and their own link (bearer: the session's trainer token)", body = TrainerLink),
+        (status = "default", description = "An error (409: the name is taken)", body = ErrorBody)
+    )
+)]
 pub async fn join(
     State(state): State<AppState>,
     SessionAccess(row, who): SessionAccess,
@@ -115,6 +139,16 @@ pub async fn join(
 
 /// `GET /api/sessions/{id}/trainers` (researcher): the session per trainer: answers, time (T),
 /// no-feedback count (NFC), latency and survey.
+#[utoipa::path(
+    get,
+    path = "/api/sessions/{id}/trainers",
+    tag = "trainers",
+    params(("id" = String, Path, description = "The session")),
+    responses(
+        (status = 200, description = "Every named trainer, then the anonymous one if it answered", body = Vec<TrainerStats>),
+        (status = "default", description = "An error", body = ErrorBody)
+    )
+)]
 pub async fn list(
     State(state): State<AppState>,
     Path(id): Path<String>,
@@ -134,6 +168,16 @@ pub async fn breakdown(state: &AppState, id: &str) -> ApiResult<Vec<TrainerStats
 
 /// `GET /api/sessions/{id}/agreement` (researcher): Krippendorff's alpha (evaluative) or
 /// Fleiss' kappa (preference) over the named trainers' answers, per session and per pair.
+#[utoipa::path(
+    get,
+    path = "/api/sessions/{id}/agreement",
+    tag = "trainers",
+    params(("id" = String, Path, description = "The session")),
+    responses(
+        (status = 200, description = "How much the named trainers agree", body = AgreementView),
+        (status = "default", description = "An error", body = ErrorBody)
+    )
+)]
 pub async fn agreement_of(
     State(state): State<AppState>,
     Path(id): Path<String>,

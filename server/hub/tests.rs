@@ -178,6 +178,9 @@ async fn a_query_counts_as_no_feedback_exactly_at_its_timeout() {
     h.settle().await;
     assert_eq!(h.controls.try_recv(), Err(TryRecvError::Empty));
     assert_eq!(h.handle.status(), Status::Waiting);
+    // `waiting` is live state only: the database keeps `running` (no write per query).
+    let stored = h.store.session("s1").await.unwrap().unwrap().status;
+    assert_eq!(stored, Status::Running);
     tokio::time::advance(Duration::from_millis(1)).await;
     assert_eq!(
         h.control().await,

@@ -10,7 +10,7 @@ use crate::guidance::drpl::trainer::{Preference, PreferenceTally};
 use crate::guidance::evaluative_trainer::MeanLabel;
 
 /// The rule a session combines its trainers' answers by.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Combine {
     /// One answer per query: the first committed wins (the others get `already_answered`).

@@ -17,7 +17,7 @@ use super::query::{QueryContent, QueryData};
 
 /// Which answers a query takes: a +1 / 0 / -1 judgement (DREF, EF) or a preference between two
 /// segments (DRPL and the other preference methods).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum QueryKind {
     Evaluative,
@@ -40,7 +40,7 @@ impl QueryKind {
 }
 
 /// Who gave an answer.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Answerer {
     /// A person, through the websocket.
@@ -78,7 +78,7 @@ impl Answerer {
 /// A trainer's answer as the websocket carries it: `1 | 0 | -1` or `"left" | "right" | "equal" |
 /// "skip"`; and what several trainers' answers combine into (`session::combine`): a mean such
 /// as `0.5`, or a tally `{"tally": {"left": 2, ...}}`, which no trainer sends.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(untagged)]
 pub enum AnswerValue {
     Evaluation(i8),

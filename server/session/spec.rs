@@ -25,7 +25,7 @@ pub use crate::settings::{
 pub const DEFAULT_QUERIES: usize = 40;
 
 /// Who answers the session's queries.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum TrainerKind {
     /// People in browsers, at a watchable pace.

@@ -8,7 +8,7 @@ use crate::guidance::teacher::TeacherFaults;
 use crate::session::combine::Combine;
 
 /// `teacher_beta`: a rationality, or the word `rational` (a teacher that never errs by chance).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(untagged)]
 pub enum TeacherBeta {
     Rational(RationalWord),
@@ -16,14 +16,14 @@ pub enum TeacherBeta {
 }
 
 /// The word `rational`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum RationalWord {
     Rational,
 }
 
 /// `teacher_skip`: a threshold, or the word `never`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(untagged)]
 pub enum TeacherSkip {
     Never(NeverWord),
@@ -31,7 +31,7 @@ pub enum TeacherSkip {
 }
 
 /// The word `never`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum NeverWord {
     Never,

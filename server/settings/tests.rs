@@ -190,8 +190,12 @@ fn the_offered_defaults_are_the_runs_defaults_and_apply_cleanly() {
         let offered = Settings::defaults(task, Family::Evaluative);
         let round_trip = Settings::from_json(serde_json::to_value(&offered).unwrap()).unwrap();
         assert_eq!(round_trip, offered);
-        // `success` is offered as the variant's own rule, which the default leaves implicit.
+        // `start` and `success` are offered as the variant's own, which the default leaves
+        // implicit.
         let mut expected = EvaluativeRunConfig::new(task, EvaluativeMethod::Dref, 0);
+        if task != Task::LunarLander {
+            expected.env.start = Some(expected.env.start_pose());
+        }
         if task == Task::Placing {
             expected.env.success = Some(expected.env.placing_success());
         }

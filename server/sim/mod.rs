@@ -17,5 +17,7 @@ mod tabletop;
 mod task;
 
 pub use env::{BoxSpace, Cuboid, Env, EnvSpec, Geometry, Outcome, Pose2, Pose3, RenderState, Step};
-pub use options::{DEFAULT_RELEASE_AT, EnvOptions, GripObservation, PlacingSuccess, Variant};
+pub use options::{
+    DEFAULT_RELEASE_AT, EnvOptions, GripObservation, PlacingSuccess, Start, Variant,
+};
 pub use task::{Task, UnknownTask};

@@ -12,7 +12,7 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 /// The start pose, speed and gripper of Reaching and Placing.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Variant {
     /// The authors' tasks: the robot's home pose with 5 % reset noise, 1.2 cm per step, and
@@ -24,8 +24,19 @@ pub enum Variant {
     Uniform,
 }
 
+/// Where an episode of Reaching or Placing starts, before its reset moves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Start {
+    /// \[authors\] The robot's home pose.
+    Home,
+    /// Anywhere over the table (the first version's start; the paper's for DRPL's random
+    /// trajectories: "agents starting at random positions and taking random actions").
+    Uniform,
+}
+
 /// When a released ball counts as placed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum PlacingSuccess {
     /// \[authors\] Released while its centre is over the opening and above the ring: success at
@@ -37,7 +48,7 @@ pub enum PlacingSuccess {
 }
 
 /// What Placing's fourth observation `g` holds.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum GripObservation {
     /// \[authors\] The sign of the last gripper command: -1 if it was "open", else +1.
@@ -57,6 +68,9 @@ pub const DEFAULT_RELEASE_AT: f32 = 0.88;
 #[serde(default, deny_unknown_fields)]
 pub struct EnvOptions {
     pub variant: Variant,
+    /// Where episodes start; `None` is the variant's own (`home` for the authors' variant,
+    /// `uniform` for the first version).
+    pub start: Option<Start>,
     /// Placing's success rule; `None` is the variant's own (`over` for the authors' variant,
     /// `through` for the uniform one).
     pub success: Option<PlacingSuccess>,
@@ -69,6 +83,7 @@ impl Default for EnvOptions {
     fn default() -> Self {
         Self {
             variant: Variant::Authors,
+            start: None,
             success: None,
             observe_grip: GripObservation::Sign,
             release_at: DEFAULT_RELEASE_AT,
@@ -77,6 +92,14 @@ impl Default for EnvOptions {
 }
 
 impl EnvOptions {
+    /// Where episodes start after the variant's default is applied.
+    pub fn start_pose(&self) -> Start {
+        self.start.unwrap_or(match self.variant {
+            Variant::Authors => Start::Home,
+            Variant::Uniform => Start::Uniform,
+        })
+    }
+
     /// Placing's success rule after the variant's default is applied.
     pub fn placing_success(&self) -> PlacingSuccess {
         self.success.unwrap_or(match self.variant {

@@ -18,7 +18,9 @@ use rand_chacha::ChaCha8Rng;
 use super::tabletop::{
     self, CONTROL_HZ, MAX_EPISODE_STEPS, Region, TABLE_TOP_Z, TableWorld, clip_action, gated_move,
 };
-use super::{BoxSpace, Env, EnvSpec, Geometry, Outcome, RenderState, Step, Variant};
+use super::{
+    BoxSpace, Env, EnvOptions, EnvSpec, Geometry, Outcome, RenderState, Start, Step, Variant,
+};
 
 /// Half widths of the goal area (the scene graph's band edges are the same numbers).
 pub const GOAL_HALF_X: f32 = 0.05;
@@ -66,6 +68,7 @@ fn gated(p: [f32; 2], a: [f32; 2], step: f32) -> [f32; 2] {
 pub struct Reaching {
     spec: EnvSpec,
     variant: Variant,
+    start: Start,
     world: TableWorld,
     elapsed: u32,
     done: bool,
@@ -78,6 +81,15 @@ impl Reaching {
     }
 
     pub fn with_variant(variant: Variant) -> Self {
+        Self::with_options(&EnvOptions {
+            variant,
+            ..EnvOptions::default()
+        })
+    }
+
+    /// The task's version (`variant`) and where its episodes start (`start`).
+    pub fn with_options(options: &EnvOptions) -> Self {
+        let variant = options.variant;
         let spec = EnvSpec {
             id: "reaching",
             observation_space: BoxSpace {
@@ -95,6 +107,7 @@ impl Reaching {
         Self {
             spec,
             variant,
+            start: options.start_pose(),
             world,
             elapsed: 0,
             done: true,
@@ -140,9 +153,9 @@ impl Env for Reaching {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let step = step_size(self.variant);
         let p = loop {
-            let mut p = match self.variant {
-                Variant::Authors => HOME,
-                Variant::Uniform => loop {
+            let mut p = match self.start {
+                Start::Home => HOME,
+                Start::Uniform => loop {
                     let p = [
                         rng.random_range(-TABLE_HALF_X..TABLE_HALF_X),
                         rng.random_range(-TABLE_HALF_Y..TABLE_HALF_Y),

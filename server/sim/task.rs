@@ -7,7 +7,19 @@ use serde::{Deserialize, Serialize};
 
 use super::{Env, EnvOptions, lunar_lander, placing, reaching};
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    PartialOrd,
+    Ord,
+    Serialize,
+    Deserialize,
+    utoipa::ToSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum Task {
     Reaching,
@@ -35,7 +47,7 @@ impl Task {
     /// The task's env built with `options` (Lunar Lander has none and ignores them).
     pub fn make_env_with(self, options: &EnvOptions) -> Box<dyn Env> {
         match self {
-            Task::Reaching => Box::new(reaching::Reaching::with_variant(options.variant)),
+            Task::Reaching => Box::new(reaching::Reaching::with_options(options)),
             Task::Placing => Box::new(placing::Placing::with_options(*options)),
             Task::LunarLander => Box::new(lunar_lander::LunarLander::new()),
         }

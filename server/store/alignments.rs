@@ -7,7 +7,7 @@ use sqlx::Row;
 use super::{Result, Store};
 
 /// The posterior after `queries` queries.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, utoipa::ToSchema)]
 pub struct AlignmentRow {
     pub queries: i64,
     pub alignment: f64,

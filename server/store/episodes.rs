@@ -7,7 +7,7 @@ use super::{Result, Store};
 use crate::guidance::evaluative_run::EpisodeRecord;
 
 /// One finished episode, as `GET /api/sessions/{id}/episodes` lists it.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, utoipa::ToSchema)]
 pub struct EpisodeRow {
     pub episode: i64,
     pub step: i64,

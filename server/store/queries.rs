@@ -21,7 +21,7 @@ pub struct QueryRow {
 }
 
 /// One answered query, as `GET /api/sessions/{id}/answers` lists it.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, utoipa::ToSchema)]
 pub struct AnswerRow {
     /// The session's query number (the query's id on the websocket).
     pub query_id: i64,
@@ -278,7 +278,7 @@ impl Store {
 }
 
 /// A session's answers counted.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, utoipa::ToSchema)]
 pub struct AnswerCounts {
     pub total: i64,
     pub by_trainer: i64,

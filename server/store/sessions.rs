@@ -7,7 +7,7 @@ use sqlx::sqlite::SqliteRow;
 use super::{Result, Store};
 
 /// A session's lifecycle state (`status` in the API and the table).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Status {
     Queued,
@@ -49,6 +49,15 @@ impl Status {
     }
 
     /// Whether a session in this state has a live thread (or is about to).
+    /// The status the database keeps: `waiting` lives in memory only and is stored as
+    /// `running` (both become `interrupted` after a crash).
+    pub fn stored(self) -> Status {
+        match self {
+            Status::Waiting => Status::Running,
+            other => other,
+        }
+    }
+
     pub fn is_active(self) -> bool {
         matches!(self, Status::Queued | Status::Running | Status::Waiting)
     }

@@ -6,7 +6,7 @@ use sqlx::Row;
 use super::{Result, Store};
 
 /// Overall experience, perceived intelligence of the robot, cognitive ease: each 1 to 5.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Survey {
     pub overall_experience: u8,

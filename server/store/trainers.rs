@@ -12,7 +12,7 @@ use super::{Result, Store, Survey};
 use crate::session::AnswerValue;
 
 /// How a trainer came to the session.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum TrainerOrigin {
     /// A researcher invited them: a link of their own.

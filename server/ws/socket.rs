@@ -27,6 +27,21 @@ pub const MAX_MESSAGE_BYTES: usize = 4 * 1024;
 const ANSWER_RATE: f64 = 20.0;
 const ANSWER_BURST: f64 = 40.0;
 
+/// The trainer's websocket: JSON messages, one typed enum each way (`docs/protocol.md`).
+#[utoipa::path(
+    get,
+    path = "/ws/sessions/{id}",
+    tag = "trainers",
+    security(()),
+    params(
+        ("id" = String, Path, description = "The session"),
+        ("token" = String, Query, description = "The session's trainer token (from its trainer_url), or the researcher token")
+    ),
+    responses(
+        (status = 101, description = "Switching to the websocket protocol"),
+        (status = "default", description = "An error", body = crate::http::openapi::ErrorBody)
+    )
+)]
 pub async fn upgrade(
     State(state): State<AppState>,
     SessionAccess(row, who): SessionAccess,

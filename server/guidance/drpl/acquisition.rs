@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use super::belief::{Belief, Response};
 
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Acquisition {
     /// Uniformly among the candidates \[paper\].

@@ -21,7 +21,7 @@ use super::trainer::{Preference, PreferenceQuery, PreferenceTrainer};
 use super::trajectories::{self, DEFAULT_TRAJECTORIES};
 use crate::guidance::teacher::TeacherFaults;
 use crate::scene_graph::SceneGraph;
-use crate::sim::{EnvOptions, Task};
+use crate::sim::{EnvOptions, Start, Task};
 
 /// ChaCha streams of a run's seed (stream 1 is `trajectories::rng`).
 const THETA_STREAM: u64 = 2;
@@ -66,7 +66,13 @@ impl PreferenceRunConfig {
             acquisition: Acquisition::Uniform,
             belief: BeliefConfig::default(),
             scene_graph: SceneGraph::for_task(task),
-            env: EnvOptions::default(),
+            env: EnvOptions {
+                // The paper's random trajectories start "at random positions": from the home
+                // pose they rarely reach the hoop, and Placing's features over the opening
+                // stay near constant (docs/results/fig5).
+                start: (task != Task::LunarLander).then_some(Start::Uniform),
+                ..EnvOptions::default()
+            },
             teacher: TeacherFaults::default(),
         }
     }

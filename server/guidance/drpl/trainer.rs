@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::pool::Clip;
 
 /// A trainer's answer to "which of the two is better?".
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Preference {
     Left,
@@ -22,7 +22,9 @@ pub enum Preference {
 }
 
 /// How many trainers chose each answer of one query.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, utoipa::ToSchema,
+)]
 #[serde(deny_unknown_fields)]
 pub struct PreferenceTally {
     pub left: u8,

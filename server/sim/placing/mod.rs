@@ -43,7 +43,7 @@ use super::tabletop::{
 };
 use super::{
     BoxSpace, Env, EnvOptions, EnvSpec, Geometry, GripObservation, Outcome, PlacingSuccess,
-    RenderState, Step, Variant,
+    RenderState, Start, Step, Variant,
 };
 pub use heuristic::heuristic;
 pub use hoop::{
@@ -210,9 +210,9 @@ impl Placing {
     /// A start for the reset: the home pose, or a uniform draw above the table (`None` for a
     /// draw the workspace or the no-entry box rejects).
     fn draw_start(&self, rng: &mut ChaCha8Rng) -> Option<[f32; 3]> {
-        match self.options.variant {
-            Variant::Authors => Some(HOME),
-            Variant::Uniform => {
+        match self.options.start_pose() {
+            Start::Home => Some(HOME),
+            Start::Uniform => {
                 let p = [
                     rng.random_range(WORKSPACE.lo[0]..WORKSPACE.hi[0]),
                     rng.random_range(WORKSPACE.lo[1]..WORKSPACE.hi[1]),
