@@ -118,14 +118,20 @@ fn draw_errors<DB: DrawingBackend>(
             )
         }))?;
         chart.draw_series(points.iter().map(|p| Circle::new(*p, 4, color.filled())))?;
-        let feedback = cells
-            .first()
-            .map(|c| c.feedback_pct.mean)
-            .unwrap_or(f64::NAN);
-        let label = if method.starts_with("ef-") || !feedback.is_finite() {
-            display_name(method)
+        // A method whose name does not fix its feedback rate (DREF) shows it at every point.
+        let shows_rate = !method.starts_with("ef-");
+        if shows_rate {
+            let style = text(TICK_PX - 2).color(&color);
+            chart.draw_series(cells.iter().zip(&points).filter_map(|(c, p)| {
+                let pct = c.feedback_pct.mean;
+                pct.is_finite()
+                    .then(|| Text::new(format!("{pct:.0} %"), (p.0 + 0.6, p.1), style.clone()))
+            }))?;
+        }
+        let label = if shows_rate {
+            format!("{} (labels: % of steps asked)", display_name(method))
         } else {
-            format!("{} ({feedback:.1} % at 0 %)", display_name(method))
+            display_name(method)
         };
         chart
             .draw_series(LineSeries::new(points, color.stroke_width(2)))?
