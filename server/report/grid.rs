@@ -48,11 +48,18 @@ pub const MATCHED_EF: &str = "ef-dref";
 /// runs, so it is meant for `--tasks reaching`.
 pub const SAC_UNSCALED: &str = "sac-r100";
 
+/// The grid's name for DREF with its human critic regressed on queried steps only
+/// (`human_critic_mask`, our choice in algorithms.md; the authors regress it on every sampled
+/// step, the unqueried ones as H = 0). Not in the paper: a row beside DREF where its query rule
+/// stops asking and the unqueried zeros wash out what the critic learnt (fig3/README.md).
+pub const DREF_MASKED: &str = "dref-masked";
+
 /// The `--set` overrides a Figure 3 row adds on `task`, beyond the grid's own: the authors'
-/// reward scale for Reaching's SAC baseline.
+/// reward scale for Reaching's SAC baseline, the mask of DREF's masked row.
 pub fn row_overrides(task: Task, method: &str) -> &'static [&'static str] {
     match (task, method) {
         (Task::Reaching, "sac") => &["reward_scale=0.1"],
+        (_, DREF_MASKED) => &["human_critic_mask=true"],
         _ => &[],
     }
 }
@@ -107,10 +114,13 @@ impl GridConfig {
         for m in &self.methods {
             let ok = match self.figure {
                 Figure::Fig3 => {
-                    matches!(m.as_str(), "dref" | "sac" | MATCHED_EF | SAC_UNSCALED)
-                        || m.strip_prefix("ef-")
-                            .and_then(|p| p.parse::<f64>().ok())
-                            .is_some_and(|p| (0.0..=100.0).contains(&p))
+                    matches!(
+                        m.as_str(),
+                        "dref" | "sac" | MATCHED_EF | SAC_UNSCALED | DREF_MASKED
+                    ) || m
+                        .strip_prefix("ef-")
+                        .and_then(|p| p.parse::<f64>().ok())
+                        .is_some_and(|p| (0.0..=100.0).contains(&p))
                 }
                 Figure::Fig5 | Figure::Robustness => {
                     Figure::Fig5.default_methods().contains(&m.as_str())
@@ -118,7 +128,9 @@ impl GridConfig {
             };
             if !ok {
                 let known = match self.figure {
-                    Figure::Fig3 => "dref, sac, sac-r100, ef-<p> (0 <= p <= 100), ef-dref",
+                    Figure::Fig3 => {
+                        "dref, sac, sac-r100, dref-masked, ef-<p> (0 <= p <= 100), ef-dref"
+                    }
                     Figure::Fig5 | Figure::Robustness => "drpl, drpl-ss, fragment, full",
                 };
                 return Err(format!(
@@ -154,11 +166,12 @@ impl GridConfig {
             }
             Figure::Fig5 => ("prefs", "--queries", self.queries.to_string()),
         };
-        // The fair SAC control is plain `train --method sac` at the env's reward scale.
-        let train_method = if method == SAC_UNSCALED {
-            "sac"
-        } else {
-            method
+        // The fair SAC control is plain `train --method sac` at the env's reward scale; the
+        // masked DREF row is `train --method dref` with its mask set.
+        let train_method = match method {
+            SAC_UNSCALED => "sac",
+            DREF_MASKED => "dref",
+            other => other,
         };
         let mut args: Vec<String> = [
             command,

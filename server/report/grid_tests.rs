@@ -114,3 +114,25 @@ fn report_grid_rejects_unknown_methods_before_running_anything() {
     assert!(config(Figure::Fig5, &[]).validate().is_err());
     assert_eq!(Figure::Fig3.default_methods().len(), 6);
 }
+
+#[test]
+fn report_grid_extra_rows_are_train_runs_with_their_settings() {
+    let c = config(Figure::Fig3, &["dref-masked", "sac-r100"]);
+    c.validate().unwrap();
+    let masked = c.spec(Task::Reaching, "dref-masked", 1);
+    assert_eq!(masked.dir, Path::new("grid/reaching/dref-masked/seed1"));
+    assert_eq!(
+        masked.args[..5],
+        ["train", "--task", "reaching", "--method", "dref"]
+    );
+    let sets: Vec<&str> = masked
+        .args
+        .windows(2)
+        .filter(|w| w[0] == "--set")
+        .map(|w| w[1].as_str())
+        .collect();
+    assert_eq!(sets, ["human_critic_mask=true", "batch_size=64"]);
+    let fair = c.spec(Task::Reaching, "sac-r100", 0);
+    assert_eq!(fair.args[4], "sac");
+    assert!(!fair.args.contains(&"reward_scale=0.1".to_string()));
+}

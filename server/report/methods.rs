@@ -15,6 +15,8 @@ pub enum Fig3Method {
     /// Plain SAC at the env's reward scale, where the `Sac` row follows the authors' smaller
     /// one (Reaching); no published counterpart.
     SacUnscaled,
+    /// DREF with its human critic regressed on queried steps only; no published counterpart.
+    DrefMasked,
     /// EF at DREF's measured feedback rate, in percent: `ef-<p>` for any p other than the three
     /// fixed baselines. The grid names it after the rate it measured, so the name is the rule.
     EfMatched(f64),
@@ -30,6 +32,7 @@ impl Fig3Method {
             "ef-25" => Self::Ef25,
             "sac" => Self::Sac,
             "sac-r100" => Self::SacUnscaled,
+            "dref-masked" => Self::DrefMasked,
             other => Self::EfMatched(other.strip_prefix("ef-")?.parse().ok()?),
         })
     }
@@ -44,12 +47,13 @@ impl Fig3Method {
             Self::Sac => 4,
             Self::EfMatched(_) => 5,
             Self::SacUnscaled => 6,
+            Self::DrefMasked => 7,
         }
     }
 
     /// Whether the method's name already says how much feedback it gets (so a legend need not).
     pub fn rate_in_name(self) -> bool {
-        !matches!(self, Self::Dref)
+        !matches!(self, Self::Dref | Self::DrefMasked)
     }
 }
 
@@ -66,6 +70,7 @@ pub fn display_name(method: &str) -> String {
         Some(Fig3Method::Dref) => "DREF".into(),
         Some(Fig3Method::Sac) => "SAC".into(),
         Some(Fig3Method::SacUnscaled) => "SAC (reward 100)".into(),
+        Some(Fig3Method::DrefMasked) => "DREF (H on queried steps)".into(),
         Some(_) => format!("EF-{}%", &method["ef-".len()..]),
         None => method.into(),
     }

@@ -133,7 +133,7 @@ pub fn fig3_table(tasks: &[Fig3Task]) -> String {
             if !rows.iter().any(|(rank, _)| *rank == kind.rank()) {
                 let name = match kind {
                     Fig3Method::EfMatched(_) => "EF at DREF's rate".to_string(),
-                    Fig3Method::Dref => "DREF".into(),
+                    Fig3Method::Dref | Fig3Method::DrefMasked => "DREF".into(),
                     Fig3Method::Ef100 => "EF-100%".into(),
                     Fig3Method::Ef50 => "EF-50%".into(),
                     Fig3Method::Ef25 => "EF-25%".into(),
