@@ -19,9 +19,9 @@
 //!   (checkpoints as safetensors bytes). `rl::kernels` computes every layer's products: on the
 //!   portable path (matrixmultiply) or on the AVX-512 / AVX2 kernels of the `dualrep-kernels`
 //!   crate (`kernels/`), chosen at run time, on one or more threads.
-//! - [`guidance`]: when to ask (DREF's UCB query rule, EF-p%), who answers (the
-//!   `EvaluativeTrainer` trait, the expert oracle), the evaluative training loop; later, what
-//!   to ask (DRPL).
+//! - [`guidance`]: when to ask (DREF's UCB query rule, EF-p%, a person's pace), who answers
+//!   (the `EvaluativeTrainer` trait, the expert oracle, simulated teachers' faults), the
+//!   evaluative training loop, what to ask (DRPL), and how much trainers agree.
 //! - [`settings`]: every setting by name as one typed list (`Settings`), read by launch
 //!   requests, `--set`/TOML, `GET /api/tasks` and the dashboard; validated once.
 //! - [`session`]: one training session as a plain loop on its own thread, talking to the
@@ -43,6 +43,8 @@
 //! - [`remote_env`]: environments in another process or on another machine
 //!   (`docs/env-protocol.md`): a blocking TCP client that is an `Env` like the built-in tasks,
 //!   with a deadline on every read and a reason for every fault.
+//! - [`export`]: a session's datasets for other tools: transitions or preference pairs as
+//!   Parquet, the policy as safetensors.
 //! - [`record`]: the Rerun recording of a session (scene per step, rewards, predicates,
 //!   queries and answers on `step` and `episode` timelines) to an `.rrd` file and/or a live
 //!   viewer, from a logging thread behind a bounded channel.
@@ -50,9 +52,10 @@
 //!   Slurm job array tasks (one executor trait, two implementations), aggregation over seeds,
 //!   `table.md`, SVG and PNG figures (aggregation and tables are pure functions).
 //! - [`cli`]: the `dualrep` command line: `serve`, `sim`, `train`, `prefs`, `expert`,
-//!   `reproduce`, `bench`, `loadtest`.
+//!   `reproduce`, `export`, `bench`, `loadtest`.
 
 pub mod cli;
+pub mod export;
 pub mod guidance;
 pub mod http;
 pub mod hub;

@@ -7,10 +7,11 @@
 use serde::{Deserialize, Serialize};
 
 use crate::scene_graph::Predicate;
+pub use crate::session::combine::Combine;
 pub use crate::session::{AnswerValue, Answerer, QueryKind};
 use crate::session::{Frame, QueryContent};
 use crate::sim::Geometry;
-use crate::store::Status;
+use crate::store::{Status, TrainerRef};
 
 /// A query's id on the wire: the session's own query number (0 for its first query), the
 /// order in which the session asked it. Answers, acks, withdrawals and errors name queries by
@@ -39,6 +40,13 @@ pub enum ServerMessage {
         /// Steps per second the session runs at while people watch (the page paces its
         /// drawing by it).
         pace_hz: f64,
+        /// The named trainer this connection answers as (absent: anonymous, or a researcher).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        trainer: Option<TrainerRef>,
+        /// Answers each query takes from different named trainers (1: the first one wins).
+        answers_per_query: usize,
+        /// How they combine: `first`, `majority`, `mean` or `each`.
+        combine: Combine,
     },
     Frame(Frame),
     /// Boxed: a query (with its clips) is far larger than the other messages.
@@ -138,7 +146,9 @@ impl WithdrawReason {
     pub fn answered_by(who: Answerer) -> Self {
         match who {
             Answerer::Timeout => WithdrawReason::Expired,
-            Answerer::Trainer | Answerer::Synthetic => WithdrawReason::Answered,
+            Answerer::Trainer | Answerer::Trainers | Answerer::Synthetic => {
+                WithdrawReason::Answered
+            }
         }
     }
 }
@@ -167,6 +177,9 @@ pub enum ErrorCode {
     RateLimited,
     /// The session is not running; answers are closed.
     SessionEnded,
+    /// The session takes several answers per query from named trainers: this connection has
+    /// no name (open your own link, or join with a name).
+    IdentityRequired,
 }
 
 /// Why a client message was refused.
@@ -228,6 +241,12 @@ pub fn parse_client(text: &str) -> Result<ClientMessage, ProtocolError> {
         })
     };
     Ok(match wire {
+        WireClientMessage::Answer { value, .. } if !value.is_single() => {
+            return Err(ProtocolError::new(
+                ErrorCode::BadMessage,
+                "a trainer answers 1, 0, -1, \"left\", \"right\", \"equal\" or \"skip\"; means and tallies are what the server combines",
+            ));
+        }
         WireClientMessage::Answer { id, value } => ClientMessage::Answer {
             id: query(id)?,
             value,
@@ -307,6 +326,13 @@ mod tests {
                 .code,
             ErrorCode::BadMessage
         );
+        for combined in [
+            r#"0.5"#,
+            r#"{"tally":{"left":1,"right":1,"equal":0,"skip":0}}"#,
+        ] {
+            let text = format!(r#"{{"type":"answer","id":1,"value":{combined}}}"#);
+            assert_eq!(parse_client(&text).unwrap_err().code, ErrorCode::BadMessage);
+        }
         assert_eq!(
             id_of(r#"{"type":"answer","id":12,"value":"maybe"}"#),
             Some(12)

@@ -15,11 +15,17 @@ use crate::guidance::drpl::run::PreferenceRunConfig;
 use crate::guidance::drpl::selection::QueryMethod;
 use crate::guidance::evaluative_run::EvaluativeRunConfig;
 use crate::guidance::feedback_schedule::EvaluativeMethod;
+use crate::guidance::human_pace::HumanPace;
 use crate::guidance::query_rule::UcbForm;
 use crate::rl::kernels::KernelPath;
 use crate::rl::{ActorMix, HumanCriticConfig, SacConfig};
 use crate::scene_graph::SceneGraph;
 use crate::sim::{EnvOptions, GripObservation, PlacingSuccess, Start, Task, TaskRef, Variant};
+
+mod people;
+
+pub use crate::session::combine::Combine;
+pub use people::{NeverWord, RationalWord, TeacherBeta, TeacherSkip};
 
 /// A human session's control rate when the researcher does not set `pace_hz`: the robot's own.
 pub const DEFAULT_PACE_HZ: f64 = 20.0;
@@ -87,6 +93,30 @@ pub struct Settings {
     /// the server's, recorded at launch so that a resume replays with the same numerics].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kernels: Option<KernelPath>,
+    /// Answers each query takes from different named trainers [default 1].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub answers_per_query: Option<usize>,
+    /// How a query's answers combine: `first` (one answer, the first), `majority` or `mean`
+    /// (evaluative), `each` (preference: every answer its own observation).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub combine: Option<Combine>,
+
+    // ---- the synthetic teacher's faults (algorithms.md section 4, after B-Pref) ------------
+    /// Boltzmann rationality: a number, or `rational` (never errs by chance) [default].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub teacher_beta: Option<TeacherBeta>,
+    /// Myopic discount in (0, 1] [default 1: not myopic].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub teacher_gamma: Option<f64>,
+    /// Probability that an answer is flipped [default 0].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub teacher_error: Option<f64>,
+    /// Skip what is worth less than this: a number, or `never` [default].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub teacher_skip: Option<TeacherSkip>,
+    /// Answer "about equal" (evaluative: 0) below this margin [default 0].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub teacher_equal: Option<f64>,
 
     // ---- SAC (algorithms.md section 1) ---------------------------------------------------
     /// Hidden layer sizes of the actor and every critic, e.g. `[256, 256]` or `"256,256"`.
@@ -145,6 +175,10 @@ pub struct Settings {
     /// The learner stores `reward_scale * r`; reported returns keep the env's scale.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reward_scale: Option<f32>,
+    /// A person's pace: at most this many queries in any minute at `pace_hz` (0: no limit,
+    /// the paper's behaviour) [default 0].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_queries_per_minute: Option<u32>,
 
     // ---- the scene graph -----------------------------------------------------------------
     /// Lunar Lander: test both side engines on a0, as the authors' code does.
@@ -237,6 +271,10 @@ pub struct SessionSettings {
     /// The kernels the session computes with; `None` for sessions stored before they were
     /// recorded (the server's then).
     pub kernels: Option<KernelPath>,
+    /// Answers each query takes (from different named trainers).
+    pub answers_per_query: usize,
+    /// How they combine.
+    pub combine: Combine,
 }
 
 impl Settings {
@@ -301,6 +339,7 @@ impl Settings {
         if self.rerun_connect.as_deref() == Some("") {
             return Err("rerun_connect: expected a viewer URL, got an empty string".into());
         }
+        let (answers_per_query, combine) = people::answers(self.answers_per_query, self.combine)?;
         Ok(SessionSettings {
             pace_hz,
             answer_timeout_s: positive(
@@ -322,6 +361,8 @@ impl Settings {
             rerun_connect: self.rerun_connect.clone(),
             env_timeout_s: positive("env_timeout_s", self.env_timeout_s, DEFAULT_ENV_TIMEOUT_S)?,
             kernels: self.kernels,
+            answers_per_query,
+            combine,
         })
     }
 
@@ -336,6 +377,8 @@ impl Settings {
             rerun_connect,
             env_timeout_s,
             kernels,
+            answers_per_query,
+            combine,
             ..
         } = self;
         [
@@ -347,6 +390,8 @@ impl Settings {
             ("rerun_connect", rerun_connect.is_some()),
             ("env_timeout_s", env_timeout_s.is_some()),
             ("kernels", kernels.is_some()),
+            ("answers_per_query", answers_per_query.is_some()),
+            ("combine", combine.is_some()),
         ]
         .into_iter()
         .filter(|(_, set)| *set)
@@ -383,6 +428,13 @@ impl Settings {
             rerun_connect: _,
             env_timeout_s: _,
             kernels: _,
+            answers_per_query: _,
+            combine: _,
+            teacher_beta: _,
+            teacher_gamma: _,
+            teacher_error: _,
+            teacher_skip: _,
+            teacher_equal: _,
             hidden,
             learning_rate,
             batch_size,
@@ -401,6 +453,7 @@ impl Settings {
             k,
             ucb,
             reward_scale,
+            max_queries_per_minute,
             side_engines_on_a0,
             variant,
             start,
@@ -491,6 +544,11 @@ impl Settings {
             config.query_rule.form = *form;
         }
         set_positive(&mut config.reward_scale, *reward_scale, "reward_scale")?;
+        if let Some(n) = max_queries_per_minute.filter(|n| *n > 0) {
+            let pace_hz = self.session()?.pace_hz;
+            config.human_pace = Some(HumanPace::new(n, pace_hz));
+        }
+        config.teacher = people::teacher_faults(self)?;
         apply_scene_graph(&mut config.scene_graph, *side_engines_on_a0)?;
         apply_env(
             &mut config.env,
@@ -534,6 +592,13 @@ impl Settings {
             rerun_connect: _,
             env_timeout_s: _,
             kernels: _,
+            answers_per_query: _,
+            combine: _,
+            teacher_beta: _,
+            teacher_gamma: _,
+            teacher_error: _,
+            teacher_skip: _,
+            teacher_equal: _,
             hidden,
             learning_rate,
             batch_size,
@@ -552,6 +617,7 @@ impl Settings {
             k,
             ucb,
             reward_scale,
+            max_queries_per_minute,
             side_engines_on_a0,
             variant,
             start,
@@ -588,6 +654,7 @@ impl Settings {
             ("k", k.is_some()),
             ("ucb", ucb.is_some()),
             ("reward_scale", reward_scale.is_some()),
+            ("max_queries_per_minute", max_queries_per_minute.is_some()),
         ];
         if let Some((key, _)) = evaluative_only.iter().find(|(_, set)| *set) {
             return Err(format!(
@@ -635,6 +702,7 @@ impl Settings {
         if let Some(n) = at_least("samples", *samples, 1)? {
             belief.samples = n;
         }
+        config.teacher = people::teacher_faults(self)?;
         apply_scene_graph(&mut config.scene_graph, *side_engines_on_a0)?;
         apply_env(
             &mut config.env,
@@ -691,7 +759,9 @@ impl Settings {
             clip_frames: Some(DEFAULT_CLIP_FRAMES),
             record: Some(true),
             env_timeout_s: Some(DEFAULT_ENV_TIMEOUT_S),
-            ..Settings::default()
+            answers_per_query: Some(1),
+            combine: Some(Combine::First),
+            ..people::teacher_defaults()
         };
         let table_top = task != Task::LunarLander;
         let placing = task == Task::Placing;
@@ -726,6 +796,7 @@ impl Settings {
                     k: Some(c.query_rule.k),
                     ucb: Some(c.query_rule.form),
                     reward_scale: Some(c.reward_scale),
+                    max_queries_per_minute: Some(0),
                     side_engines_on_a0,
                     variant: table_top.then_some(c.env.variant),
                     start: table_top.then(|| c.env.start_pose()),

@@ -189,6 +189,11 @@ fn trainer_recovers_the_pending_query_after_a_dropped_socket() {
 }
 
 #[test]
+fn two_named_trainers_answer_each_query_and_the_review_shows_their_agreement() {
+    browser_test("two_trainers.mjs", &[]);
+}
+
+#[test]
 fn review_shows_episodes_answers_and_metrics() {
     browser_test("review.mjs", &[]);
 }

@@ -190,7 +190,7 @@ async fn bad_launch_requests_get_clear_errors_and_nothing_is_stored() {
 }
 
 /// The API's operations: the document is generated from the router, so this pins the surface.
-const OPERATIONS: [(&str, &str); 16] = [
+const OPERATIONS: [(&str, &str); 23] = [
     ("post", "/api/sessions"),
     ("get", "/api/sessions"),
     ("get", "/api/sessions/{id}"),
@@ -203,6 +203,13 @@ const OPERATIONS: [(&str, &str); 16] = [
     ("get", "/api/sessions/{id}/export"),
     ("get", "/api/sessions/{id}/recording.rrd"),
     ("post", "/api/sessions/{id}/survey"),
+    ("post", "/api/sessions/{id}/trainers"),
+    ("get", "/api/sessions/{id}/trainers"),
+    ("post", "/api/sessions/{id}/join"),
+    ("get", "/api/sessions/{id}/agreement"),
+    ("get", "/api/sessions/{id}/dataset.parquet"),
+    ("get", "/api/sessions/{id}/posterior.safetensors"),
+    ("get", "/api/sessions/{id}/policy.safetensors"),
     ("get", "/api/tasks"),
     ("get", "/api/openapi.json"),
     ("get", "/healthz"),

@@ -14,6 +14,7 @@ static GLOBAL: support::counting_alloc::Counting = support::counting_alloc::Coun
 mod belief_no_alloc;
 mod browser;
 mod cli;
+mod datasets;
 mod durability;
 mod env_contract;
 mod http_api;

@@ -337,3 +337,74 @@ fn each_run_gets_the_cores_divided_by_the_jobs_and_the_parents_kernels() {
         );
     }
 }
+
+/// `reproduce robustness` with the real binary, at a toy size: both sweeps run, each run's
+/// teacher is as its directory says, and the table and figure come out.
+#[test]
+fn robustness_sweeps_the_teachers_faults_and_reports() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("robust");
+    let run = Command::new(env!("CARGO_BIN_EXE_dualrep"))
+        .args([
+            "reproduce",
+            "robustness",
+            "--tasks",
+            "reaching",
+            "--seeds",
+            "1",
+            "--steps",
+            "120",
+            "--queries",
+            "3",
+            "--errors",
+            "0,30",
+            "--betas",
+            "1,rational",
+            "--jobs",
+            "2",
+            "--set",
+            "variant=uniform",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", stderr(&run));
+    let config = |dir: &str, file: &str| -> serde_json::Value {
+        let text = fs::read_to_string(out.join("reaching").join(dir).join("seed0").join(file));
+        serde_json::from_str(&text.unwrap()).unwrap()
+    };
+    assert_eq!(config("dref-err30", "config.json")["teacher"]["error"], 0.3);
+    assert!(
+        config("ef-100-err0", "config.json")
+            .get("teacher")
+            .is_none(),
+        "no faults at 0 %"
+    );
+    assert_eq!(
+        config("drpl-beta1", "summary.json")["config"]["teacher"]["beta"],
+        1.0
+    );
+    assert!(
+        config("drpl-rational", "summary.json")["config"]
+            .get("teacher")
+            .is_none()
+    );
+    let table = fs::read_to_string(out.join("table.md")).unwrap();
+    for row in [
+        "| 0 % | DREF | 1 |",
+        "| 30 % | EF-100% | 1 |",
+        "| 1 | DRPL | 1 |",
+        "| rational | DRPL | 1 |",
+    ] {
+        assert!(table.contains(row), "{row} in\n{table}");
+    }
+    assert!(out.join("robustness.svg").is_file() && out.join("robustness.png").is_file());
+    // --errors belongs to this grid alone.
+    let refused = Command::new(env!("CARGO_BIN_EXE_dualrep"))
+        .args(["reproduce", "fig5", "--errors", "10", "--out"])
+        .arg(tmp.path().join("x"))
+        .output()
+        .unwrap();
+    assert!(!refused.status.success() && stderr(&refused).contains("robustness"));
+}

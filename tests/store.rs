@@ -29,27 +29,34 @@ async fn store_with_session(pool: SqlitePool, id: &str) -> Store {
 async fn the_first_committed_answer_wins_and_repeats_are_idempotent(pool: SqlitePool) {
     let store = store_with_session(pool, "s1").await;
     let q = store
-        .upsert_query("s1", 0, QueryKind::Evaluative, 17, 5, "{}")
+        .upsert_query("s1", 0, QueryKind::Evaluative, 17, 5, "{}", None)
         .await
         .unwrap();
     let good = AnswerValue::Evaluation(1);
     assert_eq!(
         store
-            .commit_answer(q, "s1", good, Answerer::Trainer, 120)
+            .commit_answer(q, "s1", good, Answerer::Trainer, None, 120)
             .await
             .unwrap(),
         CommitOutcome::Committed
     );
     assert_eq!(
         store
-            .commit_answer(q, "s1", good, Answerer::Trainer, 130)
+            .commit_answer(q, "s1", good, Answerer::Trainer, None, 130)
             .await
             .unwrap(),
         CommitOutcome::AlreadyAnswered(good)
     );
     assert_eq!(
         store
-            .commit_answer(q, "s1", AnswerValue::Evaluation(-1), Answerer::Timeout, 0)
+            .commit_answer(
+                q,
+                "s1",
+                AnswerValue::Evaluation(-1),
+                Answerer::Timeout,
+                None,
+                0
+            )
             .await
             .unwrap(),
         CommitOutcome::AlreadyAnswered(good)
@@ -67,27 +74,34 @@ async fn the_first_committed_answer_wins_and_repeats_are_idempotent(pool: Sqlite
 async fn a_re_asked_query_keeps_its_id_and_replay_stops_at_the_first_gap(pool: SqlitePool) {
     let store = store_with_session(pool, "s1").await;
     let a = store
-        .upsert_query("s1", 0, QueryKind::Preference, 0, 0, "{}")
+        .upsert_query("s1", 0, QueryKind::Preference, 0, 0, "{}", None)
         .await
         .unwrap();
     let b = store
-        .upsert_query("s1", 1, QueryKind::Preference, 1, 0, "{}")
+        .upsert_query("s1", 1, QueryKind::Preference, 1, 0, "{}", None)
         .await
         .unwrap();
     assert_eq!(
         store
-            .upsert_query("s1", 1, QueryKind::Preference, 1, 0, "{}")
+            .upsert_query("s1", 1, QueryKind::Preference, 1, 0, "{}", None)
             .await
             .unwrap(),
         b
     );
     let c = store
-        .upsert_query("s1", 2, QueryKind::Preference, 2, 0, "{}")
+        .upsert_query("s1", 2, QueryKind::Preference, 2, 0, "{}", None)
         .await
         .unwrap();
     for (q, v) in [(a, Preference::Left), (c, Preference::Skip)] {
         store
-            .commit_answer(q, "s1", AnswerValue::Preference(v), Answerer::Trainer, 5)
+            .commit_answer(
+                q,
+                "s1",
+                AnswerValue::Preference(v),
+                Answerer::Trainer,
+                None,
+                5,
+            )
             .await
             .unwrap();
     }
@@ -113,6 +127,7 @@ async fn synthetic_batches_store_queries_with_answers_once(pool: SqlitePool) {
             step: i * 10,
             abstract_state: 1,
             value: AnswerValue::Evaluation(if i % 2 == 0 { 1 } else { -1 }),
+            data: None,
         })
         .collect();
     store.insert_synthetic("s1", &batch).await.unwrap();
@@ -179,46 +194,46 @@ async fn an_undo_reopens_an_answer_and_the_resume_replays_it_where_it_was_applie
     let store = store_with_session(pool, "s1").await;
     let (good, bad) = (AnswerValue::Evaluation(1), AnswerValue::Evaluation(-1));
     let q0 = store
-        .upsert_query("s1", 0, QueryKind::Evaluative, 3, 1, "{}")
+        .upsert_query("s1", 0, QueryKind::Evaluative, 3, 1, "{}", None)
         .await
         .unwrap();
     let q1 = store
-        .upsert_query("s1", 1, QueryKind::Evaluative, 9, 1, "{}")
+        .upsert_query("s1", 1, QueryKind::Evaluative, 9, 1, "{}", None)
         .await
         .unwrap();
     assert_eq!(
         store
-            .undo_answer(q0, "s1", QueryKind::Evaluative)
+            .undo_answer(q0, "s1", QueryKind::Evaluative, None)
             .await
             .unwrap(),
         UndoOutcome::NotAnswered
     );
     store
-        .commit_answer(q0, "s1", good, Answerer::Trainer, 50)
+        .commit_answer(q0, "s1", good, Answerer::Trainer, None, 50)
         .await
         .unwrap();
     store
-        .commit_answer(q1, "s1", good, Answerer::Trainer, 60)
+        .commit_answer(q1, "s1", good, Answerer::Trainer, None, 60)
         .await
         .unwrap();
     // Not undone: a new answer does not replace it.
     assert_eq!(
         store
-            .reanswer(q0, bad, Answerer::Trainer, 10)
+            .reanswer(q0, bad, Answerer::Trainer, None, 10)
             .await
             .unwrap(),
         ReanswerOutcome::Stands(good)
     );
     assert_eq!(
         store
-            .undo_answer(q0, "s1", QueryKind::Evaluative)
+            .undo_answer(q0, "s1", QueryKind::Evaluative, None)
             .await
             .unwrap(),
         UndoOutcome::Undone(1)
     );
     assert_eq!(
         store
-            .undo_answer(q0, "s1", QueryKind::Evaluative)
+            .undo_answer(q0, "s1", QueryKind::Evaluative, None)
             .await
             .unwrap(),
         UndoOutcome::AlreadyUndone
@@ -231,14 +246,14 @@ async fn an_undo_reopens_an_answer_and_the_resume_replays_it_where_it_was_applie
     store.revision_applied("s1", 0, 1, 4).await.unwrap();
     assert_eq!(
         store
-            .reanswer(q0, bad, Answerer::Trainer, 700)
+            .reanswer(q0, bad, Answerer::Trainer, None, 700)
             .await
             .unwrap(),
         ReanswerOutcome::Committed(2)
     );
     assert_eq!(
         store
-            .reanswer(q0, good, Answerer::Trainer, 800)
+            .reanswer(q0, good, Answerer::Trainer, None, 800)
             .await
             .unwrap(),
         ReanswerOutcome::Stands(bad),

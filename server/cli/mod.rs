@@ -6,6 +6,7 @@ mod bench_kernels;
 mod bench_train;
 mod compute;
 mod expert;
+mod export;
 mod grid_executor;
 mod loadtest;
 mod output;
@@ -45,8 +46,10 @@ pub enum Command {
     Prefs(prefs::PrefsArgs),
     /// Train the SAC expert that the synthetic evaluative trainer consults.
     Expert(expert::ExpertArgs),
-    /// Run the paper's Figure 3 or 5 grid here or on Slurm; write table.md and figures.
+    /// Run the paper's Figure 3 or 5 grid (or the robustness grid) here or on Slurm; write table.md and figures.
     Reproduce(reproduce::ReproduceArgs),
+    /// A stored session's datasets from a data dir: transitions or pairs (Parquet), posterior or policy (safetensors).
+    Export(export::ExportArgs),
     /// Real websocket trainers against a server: answers per second, ack latency, lost answers.
     Loadtest(loadtest::LoadtestArgs),
     /// Time the learner: `bench sac` (updates per second against the FMA peak), `bench train`
@@ -63,6 +66,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Prefs(args) => prefs::run(args),
         Command::Expert(args) => expert::run(args),
         Command::Reproduce(args) => reproduce::run(args, &compute),
+        Command::Export(args) => export::run(args),
         Command::Bench(args) => bench::run(args, &compute),
         Command::Loadtest(args) => loadtest::run(args),
     }

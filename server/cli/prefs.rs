@@ -21,7 +21,8 @@ use crate::guidance::drpl::features;
 use crate::guidance::drpl::pool::{Clip, QueryPool};
 use crate::guidance::drpl::run::{PreferenceRun, PreferenceRunConfig, QueryReport};
 use crate::guidance::drpl::selection::QueryMethod;
-use crate::guidance::drpl::trainer::{Preference, SyntheticOracle};
+use crate::guidance::drpl::simulated_teacher::SimulatedTeacher;
+use crate::guidance::drpl::trainer::Preference;
 use crate::remote_env::RemoteEnv;
 use crate::sim::Task;
 
@@ -186,7 +187,12 @@ pub fn run(args: PrefsArgs) -> anyhow::Result<()> {
             PreferenceRun::with_pool(config.clone(), pool)
         }
     };
-    let mut oracle = SyntheticOracle::new(run.theta_true().to_vec());
+    let mut oracle = SimulatedTeacher::new(
+        run.theta_true().to_vec(),
+        config.teacher,
+        run.teacher_seed(),
+        run.pool(),
+    );
     let graph = config.scene_graph;
 
     let csv_path = args.out.join("alignment.csv");

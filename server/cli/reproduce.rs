@@ -4,6 +4,7 @@
 //! resumes: finished runs (those with a `summary.json`) are skipped.
 
 mod progress;
+mod robustness;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -24,30 +25,36 @@ use super::grid_executor::{ExecutorArgs, ExecutorKind};
 
 #[derive(Debug, Args)]
 pub struct ReproduceArgs {
-    /// fig3 (evaluative feedback: `dualrep train`) or fig5 (preferences: `dualrep prefs`).
+    /// fig3 (evaluative feedback: `dualrep train`), fig5 (preferences: `dualrep prefs`) or
+    /// robustness (both, against simulated teachers that make mistakes).
     pub figure: Figure,
-    /// Comma-separated tasks.
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "lunar-lander,reaching,placing"
-    )]
+    /// Comma-separated tasks [default: lunar-lander,reaching,placing; robustness:
+    /// reaching,placing].
+    #[arg(long, value_delimiter = ',')]
     pub tasks: Vec<Task>,
     /// Seeds per method and task (0, 1, ..., N-1).
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..))]
     pub seeds: u64,
     /// fig3: environment steps per run [default: the paper's, 150k for lunar-lander, 100k
-    /// for the others].
+    /// for the others; robustness: 30k].
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub steps: Option<u64>,
     /// fig5: queries per run [default: 40].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub queries: Option<u32>,
     /// Comma-separated methods [default: fig3 dref,ef-100,ef-50,ef-25,sac,ef-dref; fig5
-    /// drpl,drpl-ss,fragment,full]. `ef-dref` is EF at DREF's measured feedback rate, run once
-    /// DREF's runs on that task have finished.
+    /// drpl,drpl-ss,fragment,full; robustness dref,ef-100,drpl]. `ef-dref` is EF at DREF's
+    /// measured feedback rate, run once DREF's runs on that task have finished.
     #[arg(long, value_delimiter = ',')]
     pub methods: Vec<String>,
+    /// robustness: the teacher's error rates in percent, for the evaluative methods [default:
+    /// 0,10,20,30].
+    #[arg(long, value_delimiter = ',')]
+    pub errors: Vec<u32>,
+    /// robustness: the teacher's Boltzmann rationalities for the preference methods, numbers or
+    /// `rational` [default: 0.5,1,2,5,10,20,rational].
+    #[arg(long, value_delimiter = ',', value_parser = robustness::parse_beta)]
+    pub betas: Vec<robustness::Beta>,
     /// A hyper-parameter override passed to every run as `--set KEY=VALUE` (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
@@ -71,8 +78,6 @@ pub fn run(args: ReproduceArgs, compute: &super::compute::Compute) -> anyhow::Re
         }
         return report(args.figure, &args.out);
     }
-    let config = grid_config(&args)?;
-    let job_name = format!("dualrep-{}", config.figure.stem());
     // Each run gets the cores its share allows (one each when the jobs fill the machine), and
     // every run computes with the kernels chosen here.
     let threads = args.executor.threads_per_run(compute.threads);
@@ -83,6 +88,13 @@ pub fn run(args: ReproduceArgs, compute: &super::compute::Compute) -> anyhow::Re
             compute.path.name().to_string(),
         ),
     ];
+    if args.figure == Figure::Robustness {
+        return robustness::run(&args, &env);
+    } else if !args.errors.is_empty() || !args.betas.is_empty() {
+        bail!("--errors and --betas are for the robustness grid");
+    }
+    let config = grid_config(&args)?;
+    let job_name = format!("dualrep-{}", config.figure.stem());
     let (mut executor, waiting) = args.executor.build(&config.out, &job_name, &env)?;
 
     let progress = Progress::new(config.total_runs());
@@ -230,7 +242,11 @@ fn grid_config(args: &ReproduceArgs) -> anyhow::Result<GridConfig> {
         args.methods.iter().map(|m| m.trim().to_string()).collect()
     };
     dedup_keep_order(&mut methods);
-    let mut tasks = args.tasks.clone();
+    let mut tasks = if args.tasks.is_empty() {
+        vec![Task::LunarLander, Task::Reaching, Task::Placing]
+    } else {
+        args.tasks.clone()
+    };
     dedup_keep_order(&mut tasks);
     let config = GridConfig {
         figure: args.figure,
@@ -246,7 +262,7 @@ fn grid_config(args: &ReproduceArgs) -> anyhow::Result<GridConfig> {
     Ok(config)
 }
 
-fn dedup_keep_order<T: PartialEq + Clone>(items: &mut Vec<T>) {
+pub(super) fn dedup_keep_order<T: PartialEq + Clone>(items: &mut Vec<T>) {
     let mut seen: Vec<T> = Vec::with_capacity(items.len());
     items.retain(|x| {
         let new = !seen.contains(x);
@@ -269,7 +285,7 @@ fn measured_dref_rate(config: &GridConfig, task: Task) -> Option<f64> {
     (!rates.is_empty()).then(|| mean_se(&rates).mean)
 }
 
-fn report(figure: Figure, out: &Path) -> anyhow::Result<()> {
+pub(super) fn report(figure: Figure, out: &Path) -> anyhow::Result<()> {
     let written = write_report(figure, out)?;
     println!(
         "{} finished runs -> {}, {}, {}",

@@ -164,6 +164,8 @@ pub struct TrainSummary {
     pub cumulative_return: f64,
     pub feedback_count: u64,
     pub feedback_fraction: f64,
+    /// Queries the method wanted that a person's pace (`max_queries_per_minute`) held back.
+    pub queries_held_back: u64,
     /// Mean return of the last 10 finished episodes.
     pub final_mean_return: f64,
     /// Success rate of the last 10 finished episodes.
@@ -327,7 +329,11 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
                 Some(env) => env.spec().action_space.dim(),
                 None => config.make_env().spec().action_space.dim(),
             };
-            Box::new(ExpertOracle::new(expert, act_dim, args.oracle))
+            Box::new(ExpertOracle::new(expert, act_dim, args.oracle).with_faults(
+                config.teacher,
+                config.seed,
+                f64::from(config.sac.gamma),
+            ))
         }
     };
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
@@ -403,6 +409,7 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
         cumulative_return: run.cumulative_return(),
         feedback_count: run.feedback_count(),
         feedback_fraction: run.feedback_count() as f64 / run.steps() as f64,
+        queries_held_back: run.queries_held_back(),
         final_mean_return,
         final_success_rate,
         wall_seconds,

@@ -16,7 +16,9 @@ use serde::{Deserialize, Serialize};
 
 use super::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
 use super::feedback_schedule::{EvaluativeMethod, FeedbackSchedule};
+use super::human_pace::HumanPace;
 use super::query_rule::{QueryRule, UcbForm};
+use super::teacher::TeacherFaults;
 use crate::rl::replay::{ReplayBuffer, Transition};
 use crate::rl::{HumanCriticConfig, Sac, SacConfig, UpdateStats};
 use crate::scene_graph::{AbstractState, SceneGraph};
@@ -68,6 +70,12 @@ pub struct EvaluativeRunConfig {
     /// 10, i.e. 0.1); episode returns and the cumulative reward stay on the env's scale.
     #[serde(default = "unit_scale")]
     pub reward_scale: f32,
+    /// At most N queries a minute (people); `None`: the method asks as it likes (the paper).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub human_pace: Option<HumanPace>,
+    /// The synthetic teacher's faults (none: the paper's oracle).
+    #[serde(default, skip_serializing_if = "TeacherFaults::is_perfect")]
+    pub teacher: TeacherFaults,
 }
 
 fn unit_scale() -> f32 {
@@ -92,6 +100,8 @@ impl EvaluativeRunConfig {
             scene_graph: SceneGraph::for_task(task),
             env: EnvOptions::default(),
             reward_scale: 1.0,
+            human_pace: None,
+            teacher: TeacherFaults::default(),
         }
     }
 
@@ -129,6 +139,8 @@ impl EvaluativeRunConfig {
             scene_graph: graph,
             env: EnvOptions::default(),
             reward_scale: 1.0,
+            human_pace: None,
+            teacher: TeacherFaults::default(),
         }
     }
 
@@ -203,6 +215,8 @@ pub struct EvaluativeRun {
     cumulative_return: f64,
     feedback_count: u64,
     no_feedback_count: u64,
+    /// Queries the method wanted that a person's pace held back.
+    held_back: u64,
     /// Per query, in order: the step it judged and the replay slot of that transition, so an
     /// answer can be revised (a trainer's undo) after the run moved on.
     queried: Vec<(u64, usize)>,
@@ -253,6 +267,7 @@ impl EvaluativeRun {
             cumulative_return: 0.0,
             feedback_count: 0,
             no_feedback_count: 0,
+            held_back: 0,
             queried: Vec::new(),
         })
     }
@@ -277,6 +292,11 @@ impl EvaluativeRun {
     /// Queries asked so far.
     pub fn feedback_count(&self) -> u64 {
         self.feedback_count
+    }
+
+    /// Queries the method wanted to ask that a person's pace (`human_pace`) held back.
+    pub fn queries_held_back(&self) -> u64 {
+        self.held_back
     }
 
     /// Queries answered "no feedback" (the paper's NFC for human trainers).
@@ -323,12 +343,22 @@ impl EvaluativeRun {
             .scene_graph
             .after_step(self.env.as_ref(), &step.obs, &self.action);
 
-        let evaluation = if self.schedule.should_ask(g) {
+        // The schedule decides first (EF's coin is drawn every step either way); a person's
+        // pace may then hold the query back.
+        let wanted = self.schedule.should_ask(g);
+        let asks = wanted
+            && self
+                .config
+                .human_pace
+                .is_none_or(|p| p.allows(self.steps, &self.queried));
+        self.held_back += u64::from(wanted && !asks);
+        let evaluation = if asks {
             let query = EvaluativeQuery {
                 step: self.steps,
                 obs: &self.obs,
                 action: &self.action,
                 next_obs: &step.obs,
+                reward: step.reward,
                 abstract_state: g,
                 predicted,
             };

@@ -57,6 +57,21 @@ fn sac_never_asks_and_ef_100_asks_every_step() {
 }
 
 #[test]
+fn a_persons_pace_holds_queries_back_and_leaves_the_rest_alone() {
+    let mut paced = tiny(Task::Reaching, "ef-100");
+    paced.human_pace = Some(crate::guidance::human_pace::HumanPace {
+        max_per_minute: 3,
+        steps_per_minute: 20,
+    });
+    let (run, trainer, _) = run(paced, 100);
+    // Three in each window of 20 steps: 15 of the 100 the method wanted.
+    assert_eq!((run.feedback_count(), trainer.asked), (15, 15));
+    assert_eq!(run.queries_held_back(), 85);
+    let (free, _, _) = self::run(tiny(Task::Reaching, "ef-100"), 100);
+    assert_eq!(free.queries_held_back(), 0);
+}
+
+#[test]
 fn dref_asks_at_the_first_step_and_counts_every_answer() {
     // While fewer than k + 1 abstract states have feedback, every state ranks in the top
     // k + 1 and DREF asks; which steps it skips later is the query rule's (tested there).

@@ -5,7 +5,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::scene_graph::AbstractState;
 
-/// A trainer's judgement of what the robot just did: H in {+1, 0, -1}.
+/// A trainer's judgement of what the robot just did: H in {+1, 0, -1}, or the mean of several
+/// trainers' judgements.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Evaluation {
@@ -13,6 +14,65 @@ pub enum Evaluation {
     /// The trainer chose not to judge (or did not answer in time); stored as H = 0.
     NoFeedback,
     Bad,
+    /// Several trainers' answers averaged (a session that combines k answers by their mean),
+    /// when the mean is not a whole number.
+    Mean(MeanLabel),
+}
+
+/// The mean of several +1 / 0 / -1 answers, strictly between -1 and 1 and not 0; compared by
+/// its bits, so it can be a map key and replays compare exactly.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(try_from = "f32", into = "f32")]
+pub struct MeanLabel(f32);
+
+impl MeanLabel {
+    /// `(good - bad) / count` as H, or `None` when it is a whole number (then it is a plain
+    /// answer) or `count` is 0.
+    pub fn of(good: u32, bad: u32, count: u32) -> Option<Self> {
+        if count == 0 {
+            return None;
+        }
+        // Through f64, so that a stored label read back as JSON gives the same f32.
+        let h = ((f64::from(good) - f64::from(bad)) / f64::from(count)) as f32;
+        (h.fract() != 0.0).then_some(Self(h))
+    }
+
+    pub fn value(self) -> f32 {
+        self.0
+    }
+}
+
+impl PartialEq for MeanLabel {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.to_bits() == other.0.to_bits()
+    }
+}
+
+impl Eq for MeanLabel {}
+
+impl std::hash::Hash for MeanLabel {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        self.0.to_bits().hash(state);
+    }
+}
+
+impl TryFrom<f32> for MeanLabel {
+    type Error = String;
+    fn try_from(h: f32) -> Result<Self, String> {
+        if h.is_finite() && h > -1.0 && h < 1.0 && h.fract() != 0.0 {
+            Ok(Self(h))
+        } else {
+            Err(format!(
+                "a mean label lies strictly between -1 and 1 and is not 0, got {h}"
+            ))
+        }
+    }
+}
+
+impl From<MeanLabel> for f32 {
+    fn from(m: MeanLabel) -> f32 {
+        m.0
+    }
 }
 
 impl Evaluation {
@@ -22,6 +82,7 @@ impl Evaluation {
             Evaluation::Good => 1.0,
             Evaluation::NoFeedback => 0.0,
             Evaluation::Bad => -1.0,
+            Evaluation::Mean(m) => m.value(),
         }
     }
 
@@ -45,6 +106,8 @@ pub struct EvaluativeQuery<'a> {
     /// The action taken, normalised to `[-1, 1]`.
     pub action: &'a [f32],
     pub next_obs: &'a [f32],
+    /// The env's reward for the step (before any `reward_scale`).
+    pub reward: f32,
     /// The scene graph on `(s_{t+1}, a_t)`.
     pub abstract_state: AbstractState,
     /// The human critic's prediction `H_hat(s_t, a_t)` before this step's update.
@@ -87,5 +150,25 @@ mod tests {
             assert_eq!(Evaluation::from_value(e.value() as i64), Some(e));
         }
         assert_eq!(Evaluation::from_value(2), None);
+    }
+
+    #[test]
+    fn means_are_fractions_that_read_back_exactly() {
+        assert_eq!(
+            MeanLabel::of(2, 0, 2),
+            None,
+            "a whole number is a plain answer"
+        );
+        assert_eq!(MeanLabel::of(0, 0, 0), None);
+        let third = MeanLabel::of(1, 0, 3).unwrap();
+        assert_eq!(third.value(), (1.0f64 / 3.0) as f32);
+        let text = serde_json::to_string(&third).unwrap();
+        assert_eq!(serde_json::from_str::<MeanLabel>(&text).unwrap(), third);
+        assert!(serde_json::from_str::<MeanLabel>("1.0").is_err());
+        assert!(serde_json::from_str::<MeanLabel>("0.0").is_err());
+        assert_eq!(
+            Evaluation::Mean(MeanLabel::of(1, 2, 4).unwrap()).value(),
+            -0.25
+        );
     }
 }

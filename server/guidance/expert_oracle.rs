@@ -6,10 +6,18 @@
 //! grows by 1e-8 every environment step (queried or not), so the bar rises to the expert's own
 //! action over a 100k-step run. For negative Q the authors' bar `alpha * Q*` lies *above* Q*
 //! (stricter than intended); `SignAware` uses `Q* - (1 - alpha) |Q*|` instead \[choice\].
+//!
+//! With faults (`teacher`, algorithms.md section 4) the oracle judges by a relative margin,
+//! `m = (Q*(s, a) - bar) / |Q*(s, a*)|` (so `beta`, `equal` and the error act alike on every
+//! task's scale), skips states whose expert value `Q*(s, a*)` is below `skip`, and a myopic one
+//! (`gamma < 1`) mixes in the step's own reward against the expert's reward rate:
+//! `gamma m + (1 - gamma) (r - (1 - discount) Q*) / ((1 - discount) |Q*|)` \[choice\]. Without
+//! faults it is the rule above exactly.
 
 use serde::{Deserialize, Serialize};
 
 use super::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
+use super::teacher::{Decision, FaultyJudge, TeacherFaults};
 use crate::rl::Sac;
 use crate::rl::rng_state::RngState;
 
@@ -32,6 +40,10 @@ pub struct ExpertOracle {
     expert: Sac,
     rule: OracleRule,
     expert_action: Vec<f32>,
+    /// The teacher's faults and their random stream (none: the paper's oracle).
+    faults: FaultyJudge,
+    /// The task's discount, for a myopic teacher's reward rate.
+    discount: f64,
 }
 
 impl ExpertOracle {
@@ -40,6 +52,48 @@ impl ExpertOracle {
             expert,
             rule,
             expert_action: vec![0.0; act_dim],
+            faults: FaultyJudge::new(TeacherFaults::default(), 0),
+            discount: 0.99,
+        }
+    }
+
+    /// The same oracle with a teacher's faults, drawing from a stream of `seed`; `discount` is
+    /// the task's (a myopic teacher compares the step's reward with the expert's rate).
+    pub fn with_faults(mut self, faults: TeacherFaults, seed: u64, discount: f64) -> Self {
+        self.faults = FaultyJudge::new(faults, seed);
+        self.discount = discount;
+        self
+    }
+
+    /// The bar the learner's value must clear at step `step`.
+    fn bar(rule: OracleRule, step: u64, q_star: f64) -> f64 {
+        let alpha = Self::alpha(step);
+        match rule {
+            OracleRule::Authors => alpha * q_star,
+            OracleRule::SignAware => q_star - (1.0 - alpha) * q_star.abs(),
+        }
+    }
+
+    /// A faulty teacher's judgement (see the module's notes).
+    fn judge_with_faults(
+        &mut self,
+        step: u64,
+        reward: f32,
+        q_expert: f32,
+        q_learner: f32,
+    ) -> Evaluation {
+        let (q_star, q) = (f64::from(q_expert), f64::from(q_learner));
+        let scale = q_star.abs().max(1e-6);
+        let mut margin = (q - Self::bar(self.rule, step, q_star)) / scale;
+        if let Some(gamma) = self.faults.faults().myopia() {
+            let rate = (1.0 - self.discount) * q_star;
+            let immediate = (f64::from(reward) - rate) / ((1.0 - self.discount) * scale);
+            margin = gamma * margin + (1.0 - gamma) * immediate;
+        }
+        match self.faults.decide(margin, q_star) {
+            Decision::First => Evaluation::Good,
+            Decision::Second => Evaluation::Bad,
+            Decision::Equal | Decision::Skip => Evaluation::NoFeedback,
         }
     }
 
@@ -50,13 +104,8 @@ impl ExpertOracle {
 
     /// The judgement given both critics' values, at step `step`.
     pub fn judge(rule: OracleRule, step: u64, q_expert: f32, q_learner: f32) -> Evaluation {
-        let alpha = Self::alpha(step);
         let (q_star, q) = (f64::from(q_expert), f64::from(q_learner));
-        let bar = match rule {
-            OracleRule::Authors => alpha * q_star,
-            OracleRule::SignAware => q_star - (1.0 - alpha) * q_star.abs(),
-        };
-        if bar < q {
+        if Self::bar(rule, step, q_star) < q {
             Evaluation::Good
         } else {
             Evaluation::Bad
@@ -69,18 +118,35 @@ impl EvaluativeTrainer for ExpertOracle {
         self.expert.act(query.obs, false, &mut self.expert_action);
         let q_expert = self.expert.q_value(query.obs, &self.expert_action);
         let q_learner = self.expert.q_value(query.obs, query.action);
-        Self::judge(self.rule, query.step, q_expert, q_learner)
+        if self.faults.faults().is_perfect() {
+            return Self::judge(self.rule, query.step, q_expert, q_learner);
+        }
+        self.judge_with_faults(query.step, query.reward, q_expert, q_learner)
     }
 
-    /// The expert's sampling stream is the oracle's only state (alpha follows the step).
+    /// The expert's sampling stream is the perfect oracle's only state (alpha follows the
+    /// step); a faulty teacher adds its own stream.
     fn checkpoint_state(&self) -> serde_json::Value {
-        serde_json::to_value(self.expert.rng_state()).expect("an RNG state serialises")
+        let expert =
+            serde_json::to_value(self.expert.rng_state()).expect("an RNG state serialises");
+        if self.faults.faults().is_perfect() {
+            return expert;
+        }
+        serde_json::json!({"expert": expert, "teacher": RngState::of(self.faults.rng())})
     }
 
     fn restore_state(&mut self, state: &serde_json::Value) -> Result<(), String> {
-        let rng =
-            RngState::deserialize(state).map_err(|e| format!("the oracle's RNG state: {e}"))?;
-        self.expert.restore_rng(&rng)
+        let read = |v: &serde_json::Value| {
+            RngState::deserialize(v).map_err(|e| format!("the oracle's RNG state: {e}"))
+        };
+        match (state.get("expert"), state.get("teacher")) {
+            (Some(expert), Some(teacher)) => {
+                self.expert.restore_rng(&read(expert)?)?;
+                self.faults.set_rng(read(teacher)?.restore()?);
+                Ok(())
+            }
+            _ => self.expert.restore_rng(&read(state)?),
+        }
     }
 }
 

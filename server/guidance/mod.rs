@@ -5,15 +5,22 @@
 //! - `feedback_schedule`: which steps ask, per method (DREF, EF-p%, SAC).
 //! - `evaluative_trainer`: the `EvaluativeTrainer` trait (synthetic oracle or a person) and H.
 //! - `expert_oracle`: the synthetic trainer, a SAC expert's critic judging the learner's action.
+//! - `teacher`: simulated teachers' faults after B-Pref (Boltzmann rationality, myopia, errors,
+//!   skip and "about equal" thresholds), shared by both synthetic oracles.
+//! - `human_pace`: at most N queries a minute, for people (the query rule still picks which).
+//! - `agreement`: how much trainers agree (Krippendorff's alpha, Fleiss' kappa).
 //! - `evaluative_run`: one SAC / EF-p% / DREF run, step by step, and policy evaluation; its
 //!   `run_checkpoint` saves a whole run between episodes so a long one resumes bit for bit.
 //! - `drpl`: what to ask: DRPL's scene-graph segments and pairs, its baselines, the belief over
 //!   the reward weights (APReL's sampling-based belief), acquisition, the synthetic preference
 //!   oracle and the preference run.
 
+pub mod agreement;
 pub mod drpl;
 pub mod evaluative_run;
 pub mod evaluative_trainer;
 pub mod expert_oracle;
 pub mod feedback_schedule;
+pub mod human_pace;
 pub mod query_rule;
+pub mod teacher;

@@ -35,6 +35,9 @@ struct RunState {
     cumulative_return: f64,
     feedback_count: u64,
     no_feedback_count: u64,
+    /// Queries a person's pace held back (checkpoints written before it existed read as 0).
+    #[serde(default)]
+    held_back: u64,
     episode_seed: u64,
     episode_seeds: RngState,
     schedule: ScheduleState,
@@ -106,6 +109,7 @@ impl EvaluativeRun {
             cumulative_return: self.cumulative_return,
             feedback_count: self.feedback_count,
             no_feedback_count: self.no_feedback_count,
+            held_back: self.held_back,
             episode_seed: self.episode_seed,
             episode_seeds: RngState::of(&self.episode_seeds),
             schedule: ScheduleState::of(&self.schedule),
@@ -210,6 +214,7 @@ impl EvaluativeRun {
             cumulative_return: state.cumulative_return,
             feedback_count: state.feedback_count,
             no_feedback_count: state.no_feedback_count,
+            held_back: state.held_back,
             queried: state.queried,
         };
         Ok((run, state.notes))
@@ -259,6 +264,11 @@ mod tests {
         episodes
     }
 
+    /// A faulty teacher (its own random stream) and a person's pace (its window of queries).
+    fn faulty(task: Task, config: &EvaluativeRunConfig) -> ExpertOracle {
+        oracle(task).with_faults(config.teacher, config.seed, 0.99)
+    }
+
     #[test]
     fn a_resumed_run_continues_bit_for_bit_on_every_kernel_path() {
         for path in KernelPath::ALL.into_iter().filter(|p| p.is_available()) {
@@ -267,13 +277,24 @@ mod tests {
     }
 
     fn resumed_run_continues_bit_for_bit(path: KernelPath) {
+        let mut paced = tiny(Task::Placing, "dref");
+        paced.teacher = crate::guidance::teacher::TeacherFaults {
+            beta: Some(50.0),
+            error: 0.2,
+            ..Default::default()
+        };
+        paced.human_pace = Some(crate::guidance::human_pace::HumanPace {
+            max_per_minute: 3,
+            steps_per_minute: 40,
+        });
         // Tasks whose random episodes are short, so a few hundred steps cross several.
-        for (task, method) in [
-            (Task::Placing, "dref"),
-            (Task::Placing, "ef-50"),
-            (Task::LunarLander, "sac"),
+        for (task, method, config) in [
+            (Task::Placing, "dref", tiny(Task::Placing, "dref")),
+            (Task::Placing, "ef-50", tiny(Task::Placing, "ef-50")),
+            (Task::LunarLander, "sac", tiny(Task::LunarLander, "sac")),
+            (Task::Placing, "dref paced, faulty teacher", paced),
         ] {
-            let config = tiny(task, method);
+            let oracle = |task| faulty(task, &config);
             let steps = 600;
             let mut straight = EvaluativeRun::new(config.clone(), steps);
             let mut straight_oracle = oracle(task);
@@ -313,6 +334,7 @@ mod tests {
                 "{path} {task} {method}"
             );
             assert_eq!(resumed.feedback_count(), straight.feedback_count());
+            assert_eq!(resumed.queries_held_back(), straight.queries_held_back());
             assert_eq!(resumed.cumulative_return(), straight.cumulative_return());
         }
     }

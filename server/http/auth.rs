@@ -1,8 +1,10 @@
 //! Who may call what, as extractors: [`Researcher`] for the researcher routes
-//! (`Authorization: Bearer <token>`); [`SessionAccess`] for a session's own routes (its websocket
-//! and its survey), which take the session's trainer token (from the `trainer_url`) or the
-//! researcher's, as a bearer token or as `?token=`. Comparisons take constant time so a token
-//! cannot be guessed byte by byte.
+//! (`Authorization: Bearer <token>`); [`SessionAccess`] for a session's own routes (its websocket,
+//! joining with a name, the survey), which take the session's shared trainer token (from the
+//! `trainer_url`), a named trainer's own token (from their invitation or their join), or the
+//! researcher's, as a bearer token or as `?token=`, and say who the caller is. Comparisons of
+//! the session's and the researcher's tokens take constant time so they cannot be guessed byte
+//! by byte; a named trainer's token is looked up in the database by its value.
 
 use axum::extract::{FromRequestParts, Path, Query};
 use axum::http::header::AUTHORIZATION;
@@ -11,6 +13,7 @@ use serde::Deserialize;
 
 use super::AppState;
 use super::error::ApiError;
+use crate::hub::Identity;
 use crate::store::SessionRow;
 
 /// Equal in time independent of where the first difference is.
@@ -57,10 +60,11 @@ struct TokenQuery {
     token: Option<String>,
 }
 
-/// The caller holds the trainer token of the session named in the path (or the researcher
-/// token); the session's row comes with it.
+/// The caller holds a token of the session named in the path (its shared trainer token, a named
+/// trainer's own, or the researcher token); the session's row and who the caller is come with
+/// it.
 #[derive(Clone, Debug)]
-pub struct SessionAccess(pub SessionRow);
+pub struct SessionAccess(pub SessionRow, pub Identity);
 
 impl FromRequestParts<AppState> for SessionAccess {
     type Rejection = ApiError;
@@ -84,12 +88,19 @@ impl FromRequestParts<AppState> for SessionAccess {
                     .into(),
             ));
         };
-        if same_token(&token, &row.trainer_token) || same_token(&token, &state.token) {
-            Ok(SessionAccess(row))
-        } else {
-            Err(ApiError::Forbidden(format!(
+        if same_token(&token, &state.token) {
+            return Ok(SessionAccess(row, Identity::Researcher));
+        }
+        if same_token(&token, &row.trainer_token) {
+            return Ok(SessionAccess(row, Identity::Anonymous));
+        }
+        match state.store.trainer_by_token(&token).await? {
+            Some(t) if t.session_id == row.id => {
+                Ok(SessionAccess(row, Identity::Trainer(t.as_ref())))
+            }
+            _ => Err(ApiError::Forbidden(format!(
                 "this token is not valid for session {id}"
-            )))
+            ))),
         }
     }
 }

@@ -3,14 +3,20 @@
 //! closed unless origins are configured.
 //!
 //! - `sessions`: launch, list, inspect, stop, resume, episodes, answers, export.
+//! - `trainers`: named trainers (invite, join by name), the per-trainer breakdown, agreement;
+//!   `trainer_views` builds those views.
+//! - `datasets`: a session's Parquet table, posterior and policy files.
 //! - `tasks`, `openapi`: self-description.
 //! - `auth`, `error`: the bearer check and the JSON error shape.
 
 pub mod auth;
+pub mod datasets;
 pub mod error;
 pub mod openapi;
 pub mod sessions;
 pub mod tasks;
+pub mod trainer_views;
+pub mod trainers;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -69,11 +75,17 @@ fn researcher_routes() -> OpenApiRouter<AppState> {
         .routes(routes!(sessions::alignment))
         .routes(routes!(sessions::export))
         .routes(routes!(recording))
+        .routes(routes!(trainers::invite, trainers::list))
+        .routes(routes!(trainers::agreement_of))
+        .routes(routes!(datasets::dataset))
+        .routes(routes!(datasets::posterior))
+        .routes(routes!(datasets::policy))
 }
 
 fn public_routes() -> OpenApiRouter<AppState> {
     OpenApiRouter::new()
         .routes(routes!(sessions::survey))
+        .routes(routes!(trainers::join))
         .routes(routes!(tasks::tasks))
         .routes(routes!(openapi::openapi))
         .routes(routes!(healthz))

@@ -21,7 +21,8 @@ use utoipa::{Modify, OpenApi, ToSchema};
     components(schemas(ErrorBody, ErrorDetail)),
     tags(
         (name = "sessions", description = "Launch, watch, stop and resume training sessions; their answers, episodes and recordings"),
-        (name = "trainers", description = "What a trainer's link reaches: the websocket and the survey"),
+        (name = "trainers", description = "Trainers as people: what a trainer's link reaches (the websocket, joining by name, the survey), named trainers, the session per trainer and their agreement"),
+        (name = "datasets", description = "A session's data for other tools: Parquet tables, the posterior and the policy as safetensors"),
         (name = "service", description = "Self-description and health")
     )
 )]

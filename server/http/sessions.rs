@@ -335,14 +335,15 @@ pub struct ExportQuery {
 }
 
 /// `GET .../export?format=jsonl|csv`: JSONL holds the session, then every answer and episode,
-/// one record per line (`"record"` names it); CSV holds the answers.
+/// each trainer's summary and own answers, and the trainers' agreement, one record per line
+/// (`"record"` names it); CSV holds the answers, with the trainer who gave each.
 #[utoipa::path(
     get,
     path = "/api/sessions/{id}/export",
     tag = "sessions",
     params(("id" = String, Path, description = "The session"), ExportQuery),
     responses(
-        (status = 200, description = "JSONL: the session, then every answer and episode, one record per line (`record` names it); CSV: the answers", content(
+        (status = 200, description = "JSONL: the session, then every answer and episode, each trainer's summary (`trainer`) and own answers (`trainer_answer`), and their agreement (`agreement`), one record per line (`record` names it); CSV: the answers, with the trainer who gave each", content(
             (String = "application/x-ndjson"),
             (String = "text/csv")
         )),
@@ -377,6 +378,22 @@ pub async fn export(
             for e in state.store.episodes(&id).await? {
                 line("episode", serde_json::to_value(&e).unwrap_or_default());
             }
+            // Per trainer, each one's own answers, and how much they agree.
+            for t in super::trainers::breakdown(&state, &id).await? {
+                line("trainer", serde_json::to_value(&t).unwrap_or_default());
+            }
+            for a in state.store.person_answers(&id).await? {
+                line(
+                    "trainer_answer",
+                    serde_json::to_value(&a).unwrap_or_default(),
+                );
+            }
+            let row = super::trainers::session_row(&state, &id).await?;
+            let agreement = super::trainers::session_agreement(&state, &row).await?;
+            line(
+                "agreement",
+                serde_json::to_value(&agreement).unwrap_or_default(),
+            );
             (out, "application/x-ndjson", "jsonl")
         }
         "csv" => {
@@ -389,6 +406,7 @@ pub async fn export(
                 "abstract_state",
                 "value",
                 "who",
+                "trainer",
                 "asked_at",
                 "answered_at",
                 "latency_ms",
@@ -404,6 +422,7 @@ pub async fn export(
                     a.abstract_state.to_string(),
                     value.trim_matches('"').to_string(),
                     a.who.as_str().to_string(),
+                    a.trainer.clone().unwrap_or_default(),
                     a.asked_at.clone(),
                     a.answered_at.clone(),
                     a.latency_ms.to_string(),
@@ -439,8 +458,9 @@ pub async fn export(
         .into_response())
 }
 
-/// `POST /api/sessions/{id}/survey`: the trainer (its session token) or a researcher stores the
-/// answers to the three questions, once the session has ended.
+/// `POST /api/sessions/{id}/survey`: the trainer (the session's shared token, or a named
+/// trainer's own, who then answers for themself) or a researcher stores the answers to the
+/// three questions, once the session has ended.
 #[utoipa::path(
     post,
     path = "/api/sessions/{id}/survey",
@@ -448,11 +468,11 @@ pub async fn export(
     params(("id" = String, Path, description = "The session")),
     security(("bearer" = [])),
     request_body = Survey,
-    responses((status = 200, description = "The session, with `survey` (bearer: the session's trainer token or the researcher token)", body = SessionView), (status = "default", description = "An error", body = ErrorBody))
+    responses((status = 200, description = "The session, with `survey` (bearer: the session's trainer token, a named trainer's own token, or the researcher token; a named trainer's answers are theirs, `GET .../trainers`)", body = SessionView), (status = "default", description = "An error", body = ErrorBody))
 )]
 pub async fn survey(
     State(state): State<AppState>,
-    SessionAccess(r): SessionAccess,
+    SessionAccess(r, who): SessionAccess,
     body: Result<Json<Survey>, JsonRejection>,
 ) -> ApiResult<Json<SessionView>> {
     let id = r.id.clone();
@@ -463,7 +483,15 @@ pub async fn survey(
             "the questions come after the session has ended".into(),
         ));
     }
-    state.store.save_survey(&id, &survey).await?;
+    match who.trainer_id() {
+        Some(trainer) => {
+            state
+                .store
+                .save_trainer_survey(trainer, &id, &survey)
+                .await?
+        }
+        None => state.store.save_survey(&id, &survey).await?,
+    }
     Ok(Json(view(&state, r).await?))
 }
 

@@ -4,11 +4,12 @@
 //! feedback" after the answer timeout) and undo: a trainer takes back the latest answer within
 //! [`UNDO_WINDOW`], the session is told (its learner drops the answer), and the query opens
 //! again beside any query the session waits on; the new answer commits as the answer's next
-//! revision.
+//! revision. Only the trainer who gave an answer (or a researcher) may undo it. Sessions that
+//! take several answers per query go through `votes` instead.
 
 use tokio::time::Instant;
 
-use super::handle::AnswerReply;
+use super::handle::{AnswerReply, Identity};
 use super::owner::{Open, Owner};
 use crate::protocol::{ErrorCode, ProtocolError, QueryId, ServerMessage, WithdrawReason};
 use crate::session::events::Revision;
@@ -24,21 +25,24 @@ pub const UNDO_WINDOW: std::time::Duration = std::time::Duration::from_secs(30);
 pub(super) struct Undoable {
     pub query: Open,
     pub at: Instant,
+    /// Who gave it.
+    pub by: Identity,
 }
 
 /// A committed answer on its way to the session thread and the browsers.
 pub(super) struct Delivery {
-    open: Open,
-    value: AnswerValue,
-    reason: WithdrawReason,
+    pub open: Open,
+    pub value: AnswerValue,
+    pub reason: WithdrawReason,
+    pub who: Identity,
 }
 
-fn refuse(code: ErrorCode, message: impl Into<String>) -> AnswerReply {
+pub(super) fn refuse(code: ErrorCode, message: impl Into<String>) -> AnswerReply {
     AnswerReply::Refused(ProtocolError::new(code, message))
 }
 
 /// The refusal for a value of the wrong kind.
-fn bad_value(id: QueryId, kind: QueryKind) -> ProtocolError {
+pub(super) fn bad_value(id: QueryId, kind: QueryKind) -> ProtocolError {
     ProtocolError::new(
         ErrorCode::BadValue,
         format!(
@@ -53,7 +57,7 @@ fn bad_value(id: QueryId, kind: QueryKind) -> ProtocolError {
 }
 
 /// The reply to an answer for a query already answered with `stored`.
-fn repeat(id: QueryId, value: AnswerValue, stored: AnswerValue) -> AnswerReply {
+pub(super) fn repeat(id: QueryId, value: AnswerValue, stored: AnswerValue) -> AnswerReply {
     if stored == value {
         AnswerReply::Ack(value)
     } else {
@@ -73,19 +77,25 @@ impl Owner {
         &mut self,
         id: QueryId,
         value: AnswerValue,
+        who: Identity,
     ) -> (AnswerReply, Option<Delivery>) {
         if !self.status.is_active() {
             return (AnswerReply::Refused(ProtocolError::session_ended()), None);
         }
-        self.commit(id, value, Answerer::Trainer).await
+        if self.answers_per_query > 1 {
+            return self.vote(id, value, who).await;
+        }
+        self.commit(id, value, Answerer::Trainer, who).await
     }
 
-    /// Commit `value` for query `id` on behalf of `who` (a trainer or the timeout).
+    /// Commit `value` for query `id` on behalf of `answerer` (a trainer, `who`, or the
+    /// timeout).
     async fn commit(
         &mut self,
         id: QueryId,
         value: AnswerValue,
-        who: Answerer,
+        answerer: Answerer,
+        who: Identity,
     ) -> (AnswerReply, Option<Delivery>) {
         let (open, reopened) = match (&self.pending, &self.reopened) {
             (_, Some(p)) if p.id == id => (p.clone(), true),
@@ -95,14 +105,24 @@ impl Owner {
         if !value.fits(self.kind) {
             return (AnswerReply::Refused(bad_value(id, self.kind)), None);
         }
-        let reason = WithdrawReason::answered_by(who);
+        let reason = WithdrawReason::answered_by(answerer);
         let latency_ms = open.asked.elapsed().as_millis() as u64;
         if reopened {
-            return (self.reanswer(open, value, who, latency_ms).await, None);
+            return (
+                self.reanswer(open, value, answerer, who, latency_ms).await,
+                None,
+            );
         }
         match self
             .store
-            .commit_answer(open.row, &self.id, value, who, latency_ms)
+            .commit_answer(
+                open.row,
+                &self.id,
+                value,
+                answerer,
+                who.trainer_id(),
+                latency_ms,
+            )
             .await
         {
             Ok(CommitOutcome::Committed) => (
@@ -111,6 +131,7 @@ impl Owner {
                     open,
                     value,
                     reason,
+                    who,
                 }),
             ),
             // Stored by an earlier run of this session: the session still waits for it.
@@ -120,6 +141,7 @@ impl Owner {
                     open,
                     value: stored,
                     reason,
+                    who,
                 }),
             ),
             Err(e) => {
@@ -141,8 +163,9 @@ impl Owner {
             open,
             value,
             reason,
+            who,
         } = d;
-        self.remember(&open, value, reason);
+        self.remember(&open, value, reason, who);
         if let Some(control) = &self.control {
             let _ = control.send(Control::Answer {
                 seq: open.id,
@@ -172,8 +195,14 @@ impl Owner {
             .map(|p| p.id)
             .collect();
         for id in due {
+            if self.answers_per_query > 1 {
+                self.close_votes(id).await;
+                continue;
+            }
             let value = AnswerValue::timeout(self.kind);
-            let (reply, delivery) = self.commit(id, value, Answerer::Timeout).await;
+            let (reply, delivery) = self
+                .commit(id, value, Answerer::Timeout, Identity::Anonymous)
+                .await;
             match (reply, delivery) {
                 (_, Some(d)) => self.deliver(d).await,
                 (AnswerReply::Refused(e), None) if e.code == ErrorCode::StoreFailed => {
@@ -198,11 +227,16 @@ impl Owner {
         &mut self,
         open: Open,
         value: AnswerValue,
-        who: Answerer,
+        answerer: Answerer,
+        who: Identity,
         latency_ms: u64,
     ) -> AnswerReply {
         let id = open.id;
-        let revision = match self.store.reanswer(open.row, value, who, latency_ms).await {
+        let revision = match self
+            .store
+            .reanswer(open.row, value, answerer, who.trainer_id(), latency_ms)
+            .await
+        {
             Ok(ReanswerOutcome::Committed(r)) => r,
             Ok(ReanswerOutcome::Stands(stored)) => {
                 self.reopened = None;
@@ -216,9 +250,9 @@ impl Owner {
                 );
             }
         };
-        let reason = WithdrawReason::answered_by(who);
+        let reason = WithdrawReason::answered_by(answerer);
         self.reopened = None;
-        self.remember(&open, value, reason);
+        self.remember(&open, value, reason, who);
         if let Some(control) = &self.control {
             let _ = control.send(Control::Revise(Revision {
                 seq: id,
@@ -235,16 +269,28 @@ impl Owner {
     }
 
     /// Take back the answer to `id`: allowed for the latest answer a trainer gave, within
-    /// [`UNDO_WINDOW`], while the session runs. Every browser gets `undone` and the query
-    /// again, which times out like any query.
-    pub(super) async fn undo(&mut self, id: QueryId) -> Result<(), ProtocolError> {
+    /// [`UNDO_WINDOW`], while the session runs, to the trainer who gave it (or a researcher).
+    /// Every browser gets `undone` and the query again, which times out like any query.
+    pub(super) async fn undo(&mut self, id: QueryId, who: &Identity) -> Result<(), ProtocolError> {
         let unavailable = |message: String| ProtocolError::new(ErrorCode::UndoUnavailable, message);
         if !self.status.is_active() {
             return Err(unavailable(
                 "the session is not running; the answer stands".into(),
             ));
         }
+        if self.answers_per_query > 1 {
+            return Err(unavailable(
+                "this session combines several trainers' answers; an answer stands once given"
+                    .into(),
+            ));
+        }
         let undoable = match self.undoable.take() {
+            Some(u) if u.query.id == id && *who != Identity::Researcher && u.by != *who => {
+                self.undoable = Some(u);
+                return Err(unavailable(format!(
+                    "query {id} was answered by another trainer; only they can undo it"
+                )));
+            }
             Some(u) if u.query.id == id && u.at.elapsed() <= UNDO_WINDOW => u,
             Some(u) if u.query.id == id => {
                 return Err(unavailable(format!(
@@ -260,7 +306,11 @@ impl Owner {
             }
         };
         let q = &undoable.query;
-        let revision = match self.store.undo_answer(q.row, &self.id, self.kind).await {
+        let revision = match self
+            .store
+            .undo_answer(q.row, &self.id, self.kind, who.trainer_id())
+            .await
+        {
             Ok(UndoOutcome::Undone(r)) => r,
             Ok(UndoOutcome::NotAnswered | UndoOutcome::AlreadyUndone) => {
                 return Err(unavailable(format!("query {id} has no answer to undo")));

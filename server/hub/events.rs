@@ -49,11 +49,21 @@ impl Owner {
                 step,
                 abstract_state,
                 content,
+                data,
             } => {
                 let payload = serde_json::to_string(&content).expect("query content serialises");
+                let data = serde_json::to_string(&data).expect("query data serialises");
                 let row = self
                     .store
-                    .upsert_query(&self.id, seq, self.kind, step, abstract_state, &payload)
+                    .upsert_query(
+                        &self.id,
+                        seq,
+                        self.kind,
+                        step,
+                        abstract_state,
+                        &payload,
+                        Some(&data),
+                    )
                     .await?;
                 let timeout = self.answer_timeout;
                 let text: Arc<str> = ServerMessage::Query(Box::new(QueryMessage {
@@ -68,6 +78,12 @@ impl Owner {
                 self.pending = Some(Open::new(seq, row, text.clone(), timeout));
                 self.set_status(Status::Waiting, None).await;
                 self.broadcast(text);
+                if self.answers_per_query > 1 {
+                    let votes = self.store.query_votes(row).await?;
+                    if !votes.is_empty() {
+                        self.restore_votes(votes).await;
+                    }
+                }
             }
             SessionEvent::Answered {
                 seq,
@@ -75,6 +91,7 @@ impl Owner {
                 abstract_state,
                 kind,
                 value,
+                data,
             } => {
                 self.batch.push(SyntheticAnswer {
                     seq,
@@ -82,6 +99,7 @@ impl Owner {
                     step,
                     abstract_state,
                     value,
+                    data: Some(serde_json::to_string(&data).expect("query data serialises")),
                 });
                 self.progress.answered += 1;
             }

@@ -9,22 +9,54 @@ use tokio::sync::{broadcast, mpsc, oneshot, watch};
 use crate::protocol::{ProgressMessage, ProtocolError, QueryId};
 use crate::session::AnswerValue;
 use crate::sim::Geometry;
-use crate::store::Status;
+use crate::store::{Status, TrainerRef};
+
+/// Who is on the other end of a socket (or a route): a researcher, a trainer on the session's
+/// shared link without a name, or a named trainer.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Identity {
+    Researcher,
+    Anonymous,
+    Trainer(TrainerRef),
+}
+
+impl Identity {
+    /// The named trainer's id (none for the anonymous trainer and researchers).
+    pub fn trainer_id(&self) -> Option<i64> {
+        match self {
+            Identity::Trainer(t) => Some(t.id),
+            _ => None,
+        }
+    }
+
+    pub fn trainer(&self) -> Option<&TrainerRef> {
+        match self {
+            Identity::Trainer(t) => Some(t),
+            _ => None,
+        }
+    }
+}
 
 /// Commands a session's owner takes, each answered on its own channel.
 #[derive(Debug)]
 pub(super) enum Command {
-    /// A browser joins: what it needs to catch up, and the broadcast from then on.
-    Join(oneshot::Sender<Joined>),
+    /// A browser joins: what it needs to catch up (the open queries `who` has not answered),
+    /// and the broadcast from then on.
+    Join {
+        who: Identity,
+        reply: oneshot::Sender<Joined>,
+    },
     /// A trainer's answer to query `id`.
     Answer {
         id: QueryId,
         value: AnswerValue,
+        who: Identity,
         reply: oneshot::Sender<AnswerReply>,
     },
     /// A trainer takes back the answer to query `id`.
     Undo {
         id: QueryId,
+        who: Identity,
         reply: oneshot::Sender<Result<(), ProtocolError>>,
     },
     /// A researcher stops the session (queued or running).
@@ -77,19 +109,26 @@ impl SessionHandle {
         self.snapshot.borrow().status
     }
 
-    /// Join the session's broadcast (`None`: the session has ended).
-    pub async fn join(&self) -> Option<Joined> {
+    /// Join the session's broadcast as `who` (`None`: the session has ended).
+    pub async fn join(&self, who: &Identity) -> Option<Joined> {
         let (reply, answer) = oneshot::channel();
-        self.commands.send(Command::Join(reply)).ok()?;
+        let who = who.clone();
+        self.commands.send(Command::Join { who, reply }).ok()?;
         answer.await.ok()
     }
 
-    /// Answer query `id`; the reply comes after the answer is committed (or refused).
-    pub async fn answer(&self, id: QueryId, value: AnswerValue) -> AnswerReply {
+    /// `who` answers query `id`; the reply comes after the answer is committed (or refused).
+    pub async fn answer(&self, id: QueryId, value: AnswerValue, who: &Identity) -> AnswerReply {
         let (reply, answer) = oneshot::channel();
+        let who = who.clone();
         if self
             .commands
-            .send(Command::Answer { id, value, reply })
+            .send(Command::Answer {
+                id,
+                value,
+                who,
+                reply,
+            })
             .is_err()
         {
             return AnswerReply::Refused(ProtocolError::session_ended());
@@ -99,11 +138,12 @@ impl SessionHandle {
             .unwrap_or(AnswerReply::Refused(ProtocolError::session_ended()))
     }
 
-    /// Take back the answer to query `id`.
-    pub async fn undo(&self, id: QueryId) -> Result<(), ProtocolError> {
+    /// `who` takes back the answer to query `id`.
+    pub async fn undo(&self, id: QueryId, who: &Identity) -> Result<(), ProtocolError> {
         let (reply, answer) = oneshot::channel();
+        let who = who.clone();
         self.commands
-            .send(Command::Undo { id, reply })
+            .send(Command::Undo { id, who, reply })
             .map_err(|_| ProtocolError::session_ended())?;
         answer.await.map_err(|_| ProtocolError::session_ended())?
     }

@@ -7,6 +7,7 @@
 //! - `owner`: the session's task, its `select!` loop and its status.
 //! - `events`: applying the session thread's events (store, browsers).
 //! - `answers`: the answer path, deadlines and undo.
+//! - `votes`: several named trainers' answers to one query, combined.
 //! - `thread`: starting the session thread; `sink`: the channel it reports into.
 //! - `remote`: reaching a session's remote env from its thread, and what it resumes from.
 //! - `recording`: the session's Rerun recording as its observer.
@@ -21,6 +22,7 @@ mod recording;
 mod remote;
 mod sink;
 mod thread;
+mod votes;
 
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -32,7 +34,7 @@ use tokio::sync::Semaphore;
 use tokio::task::JoinHandle;
 
 pub use answers::UNDO_WINDOW;
-pub use handle::{AnswerReply, Joined, SessionHandle, Snapshot};
+pub use handle::{AnswerReply, Identity, Joined, SessionHandle, Snapshot};
 
 use crate::session::SessionSpec;
 use crate::store::{NewSession, SessionRow, Status, Store};

@@ -16,11 +16,12 @@ use tokio::time::Instant;
 use super::Hub;
 use super::answers::Undoable;
 use super::episode_frames::EpisodeFrames;
-use super::handle::{Command, Joined, SessionHandle, Snapshot};
+use super::handle::{Command, Identity, Joined, SessionHandle, Snapshot};
 use crate::protocol::{ProgressMessage, QueryId, QueryKind, ServerMessage, WithdrawReason};
+use crate::session::combine::Combine;
 use crate::session::{AnswerValue, Control, Ending, SessionEvent, SessionSpec};
 use crate::sim::Geometry;
-use crate::store::{Status, Store, SyntheticAnswer};
+use crate::store::{Status, Store, SyntheticAnswer, TrainerRef};
 
 /// Messages kept for a browser that falls behind before it must catch up again.
 const BROADCAST_CAPACITY: usize = 256;
@@ -40,6 +41,8 @@ pub(super) struct Open {
     pub text: Arc<str>,
     pub asked: Instant,
     pub deadline: Instant,
+    /// The named trainers' own answers so far (sessions that take several per query).
+    pub votes: Vec<(TrainerRef, AnswerValue)>,
 }
 
 impl Open {
@@ -51,7 +54,14 @@ impl Open {
             text,
             asked,
             deadline: asked + timeout,
+            votes: Vec::new(),
         }
+    }
+
+    /// Whether the named trainer `who` has answered it.
+    pub fn answered_by(&self, who: &Identity) -> bool {
+        who.trainer()
+            .is_some_and(|t| self.votes.iter().any(|(v, _)| v.id == t.id))
     }
 }
 
@@ -64,6 +74,10 @@ pub(super) struct Owner {
     pub spec: SessionSpec,
     pub kind: QueryKind,
     pub answer_timeout: Duration,
+    /// Answers each query takes from different named trainers (1: the first one wins).
+    pub answers_per_query: usize,
+    /// How they combine.
+    pub combine: Combine,
     pub status: Status,
     pub reason: Option<String>,
     pub progress: ProgressMessage,
@@ -98,6 +112,10 @@ impl Owner {
         spec: SessionSpec,
         answer_timeout: Duration,
     ) -> (Self, SessionHandle, UnboundedReceiver<Command>) {
+        // Validated at launch: a stored session's settings read back.
+        let (answers_per_query, combine) = spec
+            .settings()
+            .map_or((1, Combine::First), |s| (s.answers_per_query, s.combine));
         let progress = ProgressMessage {
             budget: spec.budget,
             unit: spec.method.budget_unit(),
@@ -126,6 +144,8 @@ impl Owner {
             id,
             spec,
             answer_timeout,
+            answers_per_query,
+            combine,
             status: Status::Queued,
             reason: None,
             progress,
@@ -201,19 +221,24 @@ impl Owner {
 
     async fn command(&mut self, command: Command) {
         match command {
-            Command::Join(reply) => {
-                let _ = reply.send(self.join());
+            Command::Join { who, reply } => {
+                let _ = reply.send(self.join(&who));
             }
-            Command::Answer { id, value, reply } => {
-                let (answer, delivery) = self.answer(id, value).await;
+            Command::Answer {
+                id,
+                value,
+                who,
+                reply,
+            } => {
+                let (answer, delivery) = self.answer(id, value, who).await;
                 // Acknowledged once committed; the session and the other browsers hear after.
                 let _ = reply.send(answer);
                 if let Some(delivery) = delivery {
                     self.deliver(delivery).await;
                 }
             }
-            Command::Undo { id, reply } => {
-                let _ = reply.send(self.undo(id).await);
+            Command::Undo { id, who, reply } => {
+                let _ = reply.send(self.undo(id, &who).await);
             }
             Command::Stop(reply) => {
                 if let Some(control) = &self.control {
@@ -283,15 +308,15 @@ impl Owner {
     }
 
     /// What a joining browser gets after `hello`: the progress, the open queries (with their
-    /// time left), and the end if it came.
-    fn join(&self) -> Joined {
+    /// time left) that `who` has not answered yet, and the end if it came.
+    fn join(&self, who: &Identity) -> Joined {
         let broadcast = self.broadcast.subscribe();
         let mut catch_up: Vec<Arc<str>> = vec![
             ServerMessage::Progress(self.progress.clone())
                 .to_text()
                 .into(),
         ];
-        if let Some(p) = &self.pending {
+        if let Some(p) = self.pending.as_ref().filter(|p| !p.answered_by(who)) {
             catch_up.push(p.text.clone());
         }
         // Last, so that a page showing one query at a time shows the one the trainer reopened.
@@ -323,17 +348,25 @@ impl Owner {
     }
 
     /// A committed answer to query `open`: counted, kept for repeats, and undoable if a
-    /// trainer gave it.
-    pub fn remember(&mut self, open: &Open, value: AnswerValue, reason: WithdrawReason) {
+    /// trainer (`who`) gave it.
+    pub fn remember(
+        &mut self,
+        open: &Open,
+        value: AnswerValue,
+        reason: WithdrawReason,
+        who: Identity,
+    ) {
         self.progress.answered += 1;
         if self.recent.len() == RECENT_ANSWERS {
             self.recent.pop_front();
         }
         self.recent.push_back((open.id, value));
-        if reason == WithdrawReason::Answered {
+        // Several trainers' combined answers stand (no undo).
+        if reason == WithdrawReason::Answered && self.answers_per_query == 1 {
             self.undoable = Some(Undoable {
                 query: open.clone(),
                 at: Instant::now(),
+                by: who,
             });
         }
     }

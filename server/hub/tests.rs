@@ -9,12 +9,17 @@ use std::time::Duration;
 
 use tokio::sync::mpsc::{UnboundedSender, unbounded_channel};
 
-use super::handle::{AnswerReply, SessionHandle};
+use super::handle::{AnswerReply, Identity, SessionHandle};
 use super::owner::Owner;
 use super::{Hub, HubConfig, UNDO_WINDOW};
 use crate::protocol::ErrorCode;
-use crate::session::{AnswerValue, Control, QueryContent, SessionEvent, SessionSpec};
-use crate::store::{NewSession, Status, Store};
+use crate::session::{
+    AnswerValue, Answerer, Control, QueryContent, QueryData, SessionEvent, SessionSpec,
+};
+use crate::store::{AddTrainer, NewSession, Status, Store, TrainerOrigin};
+
+/// The anonymous trainer on the session's shared link.
+const ANON: Identity = Identity::Anonymous;
 
 const TIMEOUT: Duration = Duration::from_secs(20);
 
@@ -30,6 +35,22 @@ struct Harness {
 }
 
 async fn harness() -> Harness {
+    harness_with(serde_json::json!({})).await
+}
+
+/// A named trainer of session s1.
+async fn trainer(store: &Store, name: &str) -> Identity {
+    match store
+        .add_trainer("s1", name, &format!("token-{name}"), TrainerOrigin::Invited)
+        .await
+        .unwrap()
+    {
+        AddTrainer::Added(t) => Identity::Trainer(t.as_ref()),
+        AddTrainer::NameTaken => panic!("{name} is taken"),
+    }
+}
+
+async fn harness_with(params: serde_json::Value) -> Harness {
     let (clock, held) = std::sync::mpsc::channel::<()>();
     tokio::task::spawn_blocking(move || {
         let _ = held.recv();
@@ -48,6 +69,7 @@ async fn harness() -> Harness {
     );
     let spec: SessionSpec = serde_json::from_value(serde_json::json!({
         "task": "reaching", "method": "dref", "trainer": "human", "seed": 0, "budget": 1000,
+        "params": params,
     }))
     .unwrap();
     let config = serde_json::to_value(&spec).unwrap();
@@ -104,10 +126,16 @@ impl Harness {
                 step: seq * 10,
                 abstract_state: 1,
                 content: Box::new(content()),
+                data: Box::new(QueryData::Evaluative {
+                    observation: vec![0.0; 3],
+                    action: vec![0.5; 3],
+                    reward: 0.0,
+                    next_observation: vec![0.1; 3],
+                }),
             })
             .unwrap();
         self.wait_for(|s| s == Status::Waiting).await;
-        let joined = self.handle.join().await.unwrap();
+        let joined = self.handle.join(&ANON).await.unwrap();
         let query: serde_json::Value =
             serde_json::from_str(joined.catch_up.last().unwrap()).unwrap();
         assert_eq!(query["type"], "query");
@@ -135,7 +163,7 @@ impl Harness {
     /// Let the owner run whatever is due, without moving the clock.
     async fn settle(&self) {
         // A join is answered only after every command and event before it.
-        self.handle.join().await.unwrap();
+        self.handle.join(&ANON).await.unwrap();
     }
 }
 
@@ -168,10 +196,10 @@ async fn a_query_counts_as_no_feedback_exactly_at_its_timeout() {
     let answers = h.store.answers("s1").await.unwrap();
     assert_eq!(answers.len(), 1);
     assert_eq!(answers[0].query_id, id as i64);
-    assert_eq!(answers[0].who, crate::session::Answerer::Timeout);
+    assert_eq!(answers[0].who, Answerer::Timeout);
     // Late: the timeout's answer stands.
     assert!(matches!(
-        h.handle.answer(id, AnswerValue::Evaluation(1)).await,
+        h.handle.answer(id, AnswerValue::Evaluation(1), &ANON).await,
         AnswerReply::Refused(e) if e.code == ErrorCode::AlreadyAnswered
     ));
 }
@@ -188,7 +216,9 @@ async fn an_answer_before_the_timeout_wins_and_no_timeout_follows() {
     let id = h.ask(0).await;
     tokio::time::advance(TIMEOUT / 2).await;
     assert_eq!(
-        h.handle.answer(id, AnswerValue::Evaluation(-1)).await,
+        h.handle
+            .answer(id, AnswerValue::Evaluation(-1), &ANON)
+            .await,
         AnswerReply::Ack(AnswerValue::Evaluation(-1))
     );
     assert_eq!(
@@ -203,7 +233,7 @@ async fn an_answer_before_the_timeout_wins_and_no_timeout_follows() {
     assert_eq!(h.controls.try_recv(), Err(TryRecvError::Empty));
     let answers = h.store.answers("s1").await.unwrap();
     assert_eq!(answers[0].value, AnswerValue::Evaluation(-1));
-    assert_eq!(answers[0].who, crate::session::Answerer::Trainer);
+    assert_eq!(answers[0].who, Answerer::Trainer);
 }
 
 #[tokio::test(start_paused = true)]
@@ -218,10 +248,12 @@ async fn an_answer_can_be_undone_within_the_window_and_not_after() {
     // Within the window: undone, the session told, and the query open again with a new
     // deadline.
     let first = h.ask(0).await;
-    h.handle.answer(first, AnswerValue::Evaluation(1)).await;
+    h.handle
+        .answer(first, AnswerValue::Evaluation(1), &ANON)
+        .await;
     h.control().await;
     tokio::time::advance(UNDO_WINDOW - Duration::from_millis(1)).await;
-    h.handle.undo(first).await.unwrap();
+    h.handle.undo(first, &ANON).await.unwrap();
     match h.control().await {
         Control::Revise(r) => assert_eq!((r.seq, r.revision, r.value), (0, 1, None)),
         other => panic!("expected a revision, got {other:?}"),
@@ -237,10 +269,12 @@ async fn an_answer_can_be_undone_within_the_window_and_not_after() {
     }
     // Past the window: the answer stands.
     let second = h.ask(1).await;
-    h.handle.answer(second, AnswerValue::Evaluation(-1)).await;
+    h.handle
+        .answer(second, AnswerValue::Evaluation(-1), &ANON)
+        .await;
     h.control().await;
     tokio::time::advance(UNDO_WINDOW + Duration::from_millis(1)).await;
-    let refused = h.handle.undo(second).await.unwrap_err();
+    let refused = h.handle.undo(second, &ANON).await.unwrap_err();
     assert_eq!(refused.code, ErrorCode::UndoUnavailable);
     assert!(refused.message.contains("30 s"), "{}", refused.message);
     let answers = h.store.answers("s1").await.unwrap();
@@ -277,6 +311,119 @@ async fn the_end_is_stored_and_published_and_open_queries_close() {
         Status::Stopped
     );
     // The owner has gone: answers are refused as ended, not lost in a queue.
-    let reply = handle.answer(id, AnswerValue::Evaluation(1)).await;
+    let reply = handle.answer(id, AnswerValue::Evaluation(1), &ANON).await;
     assert!(matches!(reply, AnswerReply::Refused(e) if e.code == ErrorCode::SessionEnded));
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_named_answer_stores_who_and_only_its_trainer_may_undo_it() {
+    let h = harness().await;
+    let (ada, bo) = (
+        trainer(&h.store, "ada").await,
+        trainer(&h.store, "bo").await,
+    );
+    h.events
+        .send(SessionEvent::Started {
+            replayed: 0,
+            graph: crate::scene_graph::SceneGraph::Reaching,
+        })
+        .unwrap();
+    let id = h.ask(0).await;
+    h.handle.answer(id, AnswerValue::Evaluation(1), &ada).await;
+    h.control().await;
+    let refused = h.handle.undo(id, &bo).await.unwrap_err();
+    assert_eq!(refused.code, ErrorCode::UndoUnavailable);
+    assert!(
+        refused.message.contains("another trainer"),
+        "{}",
+        refused.message
+    );
+    // The shared link cannot undo a named trainer's answer either; the trainer can.
+    assert!(h.handle.undo(id, &ANON).await.is_err());
+    h.handle.undo(id, &ada).await.unwrap();
+    let answers = h.store.answers("s1").await.unwrap();
+    assert_eq!(answers[0].trainer.as_deref(), Some("ada"));
+}
+
+#[tokio::test(start_paused = true)]
+async fn k_named_trainers_answer_each_query_and_their_answers_combine() {
+    let h = harness_with(serde_json::json!({"answers_per_query": 2, "combine": "mean"})).await;
+    let (ada, bo) = (
+        trainer(&h.store, "ada").await,
+        trainer(&h.store, "bo").await,
+    );
+    h.events
+        .send(SessionEvent::Started {
+            replayed: 0,
+            graph: crate::scene_graph::SceneGraph::Reaching,
+        })
+        .unwrap();
+    let id = h.ask(0).await;
+    // Without a name there is no answer to count.
+    assert!(matches!(
+        h.handle.answer(id, AnswerValue::Evaluation(1), &ANON).await,
+        AnswerReply::Refused(e) if e.code == ErrorCode::IdentityRequired
+    ));
+    assert_eq!(
+        h.handle.answer(id, AnswerValue::Evaluation(1), &ada).await,
+        AnswerReply::Ack(AnswerValue::Evaluation(1))
+    );
+    h.settle().await;
+    assert_eq!(
+        h.controls.try_recv(),
+        Err(TryRecvError::Empty),
+        "one of two"
+    );
+    // A repeat is idempotent, a change of mind is refused; a page of ada's no longer gets it.
+    assert_eq!(
+        h.handle.answer(id, AnswerValue::Evaluation(1), &ada).await,
+        AnswerReply::Ack(AnswerValue::Evaluation(1))
+    );
+    assert!(matches!(
+        h.handle.answer(id, AnswerValue::Evaluation(-1), &ada).await,
+        AnswerReply::Refused(e) if e.code == ErrorCode::AlreadyAnswered
+    ));
+    let joined = h.handle.join(&ada).await.unwrap();
+    assert!(
+        joined
+            .catch_up
+            .iter()
+            .all(|m| !m.contains("\"type\":\"query\""))
+    );
+    h.handle.answer(id, AnswerValue::Evaluation(0), &bo).await;
+    let Control::Answer { seq: 0, value } = h.control().await else {
+        panic!("the combined answer goes to the session")
+    };
+    assert_eq!(value.as_evaluation().unwrap().value(), 0.5);
+    let answers = h.store.answers("s1").await.unwrap();
+    assert_eq!(
+        (answers[0].who, answers[0].trainer.clone()),
+        (Answerer::Trainers, None)
+    );
+    let people = h.store.person_answers("s1").await.unwrap();
+    assert_eq!(people.len(), 2);
+    assert_eq!(people[0].value, AnswerValue::Evaluation(1));
+    assert!(
+        h.handle.undo(id, &ada).await.is_err(),
+        "combined answers stand"
+    );
+
+    // With one answer when the time runs out, that one is the answer.
+    let second = h.ask(1).await;
+    h.handle
+        .answer(second, AnswerValue::Evaluation(-1), &bo)
+        .await;
+    tokio::time::advance(TIMEOUT).await;
+    assert_eq!(
+        h.control().await,
+        Control::Answer {
+            seq: 1,
+            value: AnswerValue::Evaluation(-1)
+        }
+    );
+    // Late: the query has its answer.
+    assert!(matches!(
+        h.handle.answer(second, AnswerValue::Evaluation(1), &ada).await,
+        AnswerReply::Refused(e) if e.code == ErrorCode::AlreadyAnswered
+    ));
 }

@@ -14,6 +14,9 @@ pub enum Figure {
     Fig3,
     /// Preference learning: DRPL against its baselines (`dualrep prefs`).
     Fig5,
+    /// Simulated teachers that make mistakes: DREF against EF-100 over error rates, DRPL over
+    /// the teacher's rationality (`report::robustness`).
+    Robustness,
 }
 
 impl Figure {
@@ -22,6 +25,7 @@ impl Figure {
         match self {
             Figure::Fig3 => "fig3",
             Figure::Fig5 => "fig5",
+            Figure::Robustness => "robustness",
         }
     }
 
@@ -30,6 +34,7 @@ impl Figure {
         match self {
             Figure::Fig3 => &["dref", "ef-100", "ef-50", "ef-25", "sac", MATCHED_EF],
             Figure::Fig5 => &["drpl", "drpl-ss", "fragment", "full"],
+            Figure::Robustness => &["dref", "ef-100", "drpl"],
         }
     }
 }
@@ -103,6 +108,9 @@ impl GridConfig {
         if self.tasks.is_empty() || self.seeds == 0 || self.methods.is_empty() {
             return Err("a grid needs at least one task, one seed and one method".into());
         }
+        if self.figure == Figure::Robustness {
+            return Err("the robustness grid is a `report::robustness::RobustnessConfig`".into());
+        }
         for m in &self.methods {
             let ok = match self.figure {
                 Figure::Fig3 => {
@@ -114,14 +122,16 @@ impl GridConfig {
                         .and_then(|p| p.parse::<f64>().ok())
                         .is_some_and(|p| (0.0..=100.0).contains(&p))
                 }
-                Figure::Fig5 => Figure::Fig5.default_methods().contains(&m.as_str()),
+                Figure::Fig5 | Figure::Robustness => {
+                    Figure::Fig5.default_methods().contains(&m.as_str())
+                }
             };
             if !ok {
                 let known = match self.figure {
                     Figure::Fig3 => {
                         "dref, sac, sac-r100, dref-masked, ef-<p> (0 <= p <= 100), ef-dref"
                     }
-                    Figure::Fig5 => "drpl, drpl-ss, fragment, full",
+                    Figure::Fig5 | Figure::Robustness => "drpl, drpl-ss, fragment, full",
                 };
                 return Err(format!(
                     "unknown method {m:?} for {}: expected {known}",
@@ -151,7 +161,9 @@ impl GridConfig {
     pub fn spec(&self, task: Task, method: &str, seed: u64) -> RunSpec {
         let dir = run_dir(&self.out, task, method, seed);
         let (command, budget_flag, budget) = match self.figure {
-            Figure::Fig3 => ("train", "--steps", self.steps_for(task).to_string()),
+            Figure::Fig3 | Figure::Robustness => {
+                ("train", "--steps", self.steps_for(task).to_string())
+            }
             Figure::Fig5 => ("prefs", "--queries", self.queries.to_string()),
         };
         // The fair SAC control is plain `train --method sac` at the env's reward scale; the
@@ -178,7 +190,7 @@ impl GridConfig {
         args.push(dir.to_string_lossy().into_owned());
         let row = match self.figure {
             Figure::Fig3 => row_overrides(task, method),
-            Figure::Fig5 => &[],
+            Figure::Fig5 | Figure::Robustness => &[],
         };
         for kv in row
             .iter()

@@ -10,6 +10,8 @@
 //! - [`stats`], [`aggregate`] (pure): mean and standard error over seeds, on a common step grid
 //!   for Figure 3 and per query for Figure 5.
 //! - [`table`] (pure): `table.md`, with the paper's published values beside ours.
+//! - [`robustness`] (pure): the grid, numbers and table of `reproduce robustness` (simulated
+//!   teachers that make mistakes).
 //! - [`plot`]: the figures as SVG and PNG, text in the embedded [`font`].
 //!
 //! [`write_report`] ties the last four together for a grid directory.
@@ -20,6 +22,7 @@ pub mod grid;
 pub mod local;
 pub mod methods;
 pub mod plot;
+pub mod robustness;
 pub mod run_end;
 pub mod run_files;
 pub mod runner;
@@ -66,6 +69,13 @@ pub fn write_report(figure: Figure, root: &Path) -> anyhow::Result<Written> {
             let tasks = aggregate_fig5(&runs);
             plot::write_figure(&tasks, &written.svg, &written.png)?;
             (table::fig5_table(&tasks), runs.len())
+        }
+        Figure::Robustness => {
+            let (train, prefs) = run_files::load_robustness_runs(root)?;
+            let tasks = robustness::aggregate(&train, &prefs);
+            let panels = plot::robustness::panels(&tasks);
+            plot::write_figure(&panels, &written.svg, &written.png)?;
+            (robustness::table(&tasks), train.len() + prefs.len())
         }
     };
     fs::write(&written.table, text)

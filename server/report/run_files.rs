@@ -197,6 +197,21 @@ pub fn load_prefs_runs(root: &Path) -> anyhow::Result<Vec<PrefsRun>> {
         .collect()
 }
 
+/// The finished runs of a robustness grid: `train` runs (`<method>-err<E>`) and `prefs` runs
+/// (`<method>-beta<B>`, `<method>-rational`), each read as its kind.
+pub fn load_robustness_runs(root: &Path) -> anyhow::Result<(Vec<TrainRun>, Vec<PrefsRun>)> {
+    use super::robustness::{Level, parse_label};
+    let (mut train, mut prefs) = (Vec::new(), Vec::new());
+    for (key, dir) in finished_runs(root)? {
+        match parse_label(&key.method) {
+            Some((_, Level::Error(_))) => train.push(read_train_run(key, &dir)?),
+            Some((_, Level::Beta(_))) => prefs.push(read_prefs_run(key, &dir)?),
+            None => {}
+        }
+    }
+    Ok((train, prefs))
+}
+
 fn subdirs(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     if !dir.is_dir() {
         return Ok(Vec::new());

@@ -7,9 +7,8 @@ use std::path::Path;
 use std::sync::Arc;
 
 use crate::guidance::drpl::pool::Clip;
-use crate::guidance::drpl::trainer::{
-    Preference, PreferenceQuery, PreferenceTrainer, SyntheticOracle,
-};
+use crate::guidance::drpl::simulated_teacher::SimulatedTeacher;
+use crate::guidance::drpl::trainer::{Preference, PreferenceQuery, PreferenceTrainer};
 use crate::guidance::drpl::trajectories::Trajectory;
 use crate::guidance::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
 use crate::rl::Sac;
@@ -19,7 +18,7 @@ use crate::sim::{Env, EnvOptions, Task};
 use super::events::{
     AnswerValue, Controls, Observer, QueryKind, Revision, SessionEvent, SessionSink, StoredRevision,
 };
-use super::query::{self, FrameHistory, QueryContent};
+use super::query::{self, FrameHistory, QueryContent, QueryData, SegmentData};
 use super::remote::Reconnect;
 use super::runner::SessionContext;
 
@@ -164,7 +163,7 @@ impl Asker {
         abstract_state: u32,
         kind: QueryKind,
         describe: String,
-        content: impl FnOnce() -> Result<QueryContent, String>,
+        content: impl FnOnce() -> Result<(QueryContent, QueryData), String>,
     ) -> Option<AnswerValue> {
         if let Some(v) = self.replay.pop_front() {
             let seq = self.seq;
@@ -176,7 +175,7 @@ impl Asker {
             self.aborted = true;
             return None;
         }
-        let content = match content() {
+        let (content, data) = match content() {
             Ok(c) => c,
             Err(reason) => {
                 self.fault = Some(reason);
@@ -192,6 +191,7 @@ impl Asker {
             step,
             abstract_state,
             content: Box::new(content),
+            data: Box::new(data),
         });
         match self.controls.wait_answer(seq) {
             Ok(v) => {
@@ -213,6 +213,7 @@ impl Asker {
         kind: QueryKind,
         describe: String,
         value: AnswerValue,
+        data: QueryData,
     ) {
         self.replay.pop_front();
         let seq = self.seq;
@@ -224,6 +225,7 @@ impl Asker {
             abstract_state,
             kind,
             value,
+            data: Box::new(data),
         });
         self.seq += 1;
     }
@@ -274,12 +276,13 @@ impl EvaluativeTrainer for EvaluativeAsker {
                     QueryKind::Evaluative,
                     describe_evaluative(graph, q),
                     || {
-                        Ok(QueryContent::Evaluative {
+                        let content = QueryContent::Evaluative {
                             clip: history.clip().expect("the history starts with the episode"),
                             action: q.action.to_vec(),
                             holding: graph.holding(q.abstract_state),
                             predicted: q.predicted,
-                        })
+                        };
+                        Ok((content, transition(q)))
                     },
                 )
                 .and_then(AnswerValue::as_evaluation)
@@ -298,6 +301,7 @@ impl EvaluativeTrainer for EvaluativeAsker {
                     QueryKind::Evaluative,
                     describe,
                     AnswerValue::evaluation(e),
+                    transition(q),
                 );
                 e
             }
@@ -349,7 +353,8 @@ pub(super) enum Comparer {
         trajectories: Vec<Trajectory>,
     },
     Synthetic {
-        oracle: SyntheticOracle,
+        /// Boxed: a myopic teacher carries a copy of the pool's features.
+        oracle: Box<SimulatedTeacher>,
         graph: SceneGraph,
     },
 }
@@ -375,13 +380,14 @@ impl PreferenceTrainer for PreferenceAsker {
                     QueryKind::Preference,
                     describe_preference(graph, q),
                     || {
-                        Ok(QueryContent::Preference {
+                        let content = QueryContent::Preference {
                             left: clips.render(&trajectories[q.left.trajectory], q.left)?,
                             right: clips.render(&trajectories[q.right.trajectory], q.right)?,
                             left_holding: query::holding(graph, q.left.abstract_state),
                             right_holding: query::holding(graph, q.right.abstract_state),
                             predicate: q.predicate.map(|i| graph.predicates()[i]),
-                        })
+                        };
+                        Ok((content, segments(q)))
                     },
                 )
                 .and_then(AnswerValue::as_preference)
@@ -399,10 +405,29 @@ impl PreferenceTrainer for PreferenceAsker {
                     QueryKind::Preference,
                     describe,
                     AnswerValue::Preference(p),
+                    segments(q),
                 );
                 p
             }
         }
+    }
+}
+
+/// An evaluative query's transition, for datasets.
+fn transition(q: &EvaluativeQuery<'_>) -> QueryData {
+    QueryData::Evaluative {
+        observation: q.obs.to_vec(),
+        action: q.action.to_vec(),
+        reward: q.reward,
+        next_observation: q.next_obs.to_vec(),
+    }
+}
+
+/// A preference query's two segments, for datasets.
+fn segments(q: &PreferenceQuery<'_>) -> QueryData {
+    QueryData::Preference {
+        left: SegmentData::of(q.left),
+        right: SegmentData::of(q.right),
     }
 }
 

@@ -84,11 +84,18 @@ pub(super) fn run(
                         Some(r) => r.description.action_dim(),
                         None => config.make_env().spec().action_space.dim(),
                     };
-                    Box::new(ExpertOracle::new(
-                        expert(&ctx, &config.task)?,
-                        act_dim,
-                        OracleRule::Authors,
-                    ))
+                    Box::new(
+                        ExpertOracle::new(
+                            expert(&ctx, &config.task)?,
+                            act_dim,
+                            OracleRule::Authors,
+                        )
+                        .with_faults(
+                            config.teacher,
+                            config.seed,
+                            f64::from(config.sac.gamma),
+                        ),
+                    )
                 }
             },
             graph,

@@ -9,11 +9,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::guidance::drpl::trainer::Preference;
 use crate::guidance::evaluative_run::EpisodeRecord;
-use crate::guidance::evaluative_trainer::Evaluation;
+use crate::guidance::evaluative_trainer::{Evaluation, MeanLabel};
 use crate::scene_graph::{AbstractState, SceneGraph};
 use crate::sim::{Geometry, RenderState};
 
-use super::query::QueryContent;
+use super::query::{QueryContent, QueryData};
 
 /// Which answers a query takes: a +1 / 0 / -1 judgement (DREF, EF) or a preference between two
 /// segments (DRPL and the other preference methods).
@@ -45,6 +45,8 @@ impl QueryKind {
 pub enum Answerer {
     /// A person, through the websocket.
     Trainer,
+    /// Several named trainers: their answers combined (`combine` = majority, mean or each).
+    Trainers,
     /// The session's synthetic trainer (an expert oracle or a reward).
     Synthetic,
     /// Nobody: the answer timeout gave "no feedback" (or skipped the pair).
@@ -55,36 +57,48 @@ impl Answerer {
     pub fn as_str(self) -> &'static str {
         match self {
             Answerer::Trainer => "trainer",
+            Answerer::Trainers => "trainers",
             Answerer::Synthetic => "synthetic",
             Answerer::Timeout => "timeout",
         }
     }
 
     pub fn parse(s: &str) -> Option<Self> {
-        [Answerer::Trainer, Answerer::Synthetic, Answerer::Timeout]
-            .into_iter()
-            .find(|k| k.as_str() == s)
+        [
+            Answerer::Trainer,
+            Answerer::Trainers,
+            Answerer::Synthetic,
+            Answerer::Timeout,
+        ]
+        .into_iter()
+        .find(|k| k.as_str() == s)
     }
 }
 
 /// A trainer's answer as the websocket carries it: `1 | 0 | -1` or `"left" | "right" | "equal" |
-/// "skip"`.
+/// "skip"`; and what several trainers' answers combine into (`session::combine`): a mean such
+/// as `0.5`, or a tally `{"tally": {"left": 2, ...}}`, which no trainer sends.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(untagged)]
 pub enum AnswerValue {
     Evaluation(i8),
     Preference(Preference),
+    Mean(MeanLabel),
 }
 
 impl AnswerValue {
     pub fn evaluation(e: Evaluation) -> Self {
-        AnswerValue::Evaluation(e.value() as i8)
+        match e {
+            Evaluation::Mean(m) => AnswerValue::Mean(m),
+            e => AnswerValue::Evaluation(e.value() as i8),
+        }
     }
 
     /// The evaluative answer, if this is one with a valid value.
     pub fn as_evaluation(self) -> Option<Evaluation> {
         match self {
             AnswerValue::Evaluation(v) => Evaluation::from_value(i64::from(v)),
+            AnswerValue::Mean(m) => Some(Evaluation::Mean(m)),
             AnswerValue::Preference(_) => None,
         }
     }
@@ -92,8 +106,24 @@ impl AnswerValue {
     pub fn as_preference(self) -> Option<Preference> {
         match self {
             AnswerValue::Preference(p) => Some(p),
-            AnswerValue::Evaluation(_) => None,
+            AnswerValue::Evaluation(_) | AnswerValue::Mean(_) => None,
         }
+    }
+
+    /// Whether one trainer can give this answer (combined values cannot be sent).
+    pub fn is_single(self) -> bool {
+        !matches!(
+            self,
+            AnswerValue::Mean(_) | AnswerValue::Preference(Preference::Tally(_))
+        )
+    }
+
+    /// "No feedback" or a skip: what the paper counts in NFC.
+    pub fn is_no_feedback(self) -> bool {
+        matches!(
+            self,
+            AnswerValue::Evaluation(0) | AnswerValue::Preference(Preference::Skip)
+        )
     }
 
     /// Whether this value answers a query of `kind`.
@@ -116,6 +146,10 @@ impl AnswerValue {
     pub fn as_number(self) -> f64 {
         match self {
             AnswerValue::Evaluation(v) => f64::from(v),
+            AnswerValue::Mean(m) => f64::from(m.value()),
+            AnswerValue::Preference(Preference::Tally(t)) => {
+                (f64::from(t.left) - f64::from(t.right)) / f64::from(t.total().max(1))
+            }
             AnswerValue::Preference(Preference::Left) => 1.0,
             AnswerValue::Preference(Preference::Right) => -1.0,
             AnswerValue::Preference(_) => 0.0,
@@ -156,7 +190,8 @@ pub struct Checkpoint {
     /// Queries answered so far (all of them replayable from the store).
     pub answers: u64,
     pub digest: String,
-    /// The learner's safetensors bytes (evaluative sessions).
+    /// The learner's safetensors bytes (evaluative sessions) or the posterior's (preference
+    /// sessions), written to `<data dir>/checkpoints/<id>.safetensors`.
     pub weights: Option<Vec<u8>>,
     /// What a session on a remote env resumes from (which cannot replay from step 0): its
     /// whole run (evaluative) or the trajectories it recorded (preference). Kept, latest only,
@@ -182,6 +217,8 @@ pub enum SessionEvent {
         step: u64,
         abstract_state: u32,
         content: Box<QueryContent>,
+        /// What the learner saw (stored for datasets).
+        data: Box<QueryData>,
     },
     /// A synthetic trainer's query and answer together (nobody waits).
     Answered {
@@ -190,6 +227,7 @@ pub enum SessionEvent {
         abstract_state: u32,
         kind: QueryKind,
         value: AnswerValue,
+        data: Box<QueryData>,
     },
     Episode(EpisodeRecord),
     /// A preference session's posterior after an answer.

@@ -3,6 +3,7 @@
 //!
 //! - `spec`: what a session is (task, method, trainer kind, seed, budget, parameters).
 //! - `events`: what the loop reports and the controls it obeys; answer values.
+//! - `combine`: how several trainers' answers to one query become the one the learner takes.
 //! - `query`: what a person is shown (clips, predicates).
 //! - `asker`: who answers: stored answers, people through the control channel, or a synthetic
 //!   trainer; the observer sees every query and answer.
@@ -12,6 +13,7 @@
 //!   checkpoint instead of replaying from step 0.
 
 mod asker;
+pub mod combine;
 mod evaluative_loop;
 pub mod events;
 mod preference_loop;
@@ -25,7 +27,7 @@ pub use events::{
     AnswerValue, Answerer, Checkpoint, Control, Controls, Ending, Frame, Observer, QueryKind,
     Revision, SessionEvent, SessionSink, StoredRevision,
 };
-pub use query::{Clip, QueryContent};
+pub use query::{Clip, QueryContent, QueryData, SegmentData};
 pub use remote::{QueryNumbering, Reconnect, RemoteSession};
 pub use runner::{SessionContext, digest, run_session};
 pub use spec::{SessionMethod, SessionSettings, SessionSpec, TrainerKind};

@@ -8,8 +8,10 @@ use super::remote::RemoteSession;
 use super::runner::{SessionContext, check_replay, digest, halt_ending, revised};
 use super::spec::{SessionSpec, TrainerKind};
 use crate::guidance::drpl::pool::QueryPool;
+use crate::guidance::drpl::posterior_file::posterior_safetensors;
 use crate::guidance::drpl::run::{PreferenceRun, PreferenceRunConfig};
-use crate::guidance::drpl::trainer::{Preference, SyntheticOracle};
+use crate::guidance::drpl::simulated_teacher::SimulatedTeacher;
+use crate::guidance::drpl::trainer::Preference;
 use crate::guidance::drpl::trajectories::Trajectory;
 use crate::guidance::drpl::trajectory_bytes;
 use crate::sim::TaskRef;
@@ -21,11 +23,14 @@ fn preference_checkpoint(run: &PreferenceRun) -> Checkpoint {
         .iter()
         .flat_map(|x| x.to_le_bytes())
         .collect();
+    let names = crate::guidance::drpl::features::names_of(&run.config().task);
+    let names: Vec<&str> = names.iter().map(String::as_str).collect();
     Checkpoint {
         progress: run.queries() as u64,
         answers: run.queries() as u64,
         digest: digest(&mean),
-        weights: None,
+        // The posterior, for `GET .../posterior.safetensors` and `dualrep export`.
+        weights: Some(posterior_safetensors(run.belief(), &names, run.queries())),
         resume: None,
     }
 }
@@ -107,7 +112,12 @@ pub(super) fn run(
         }
     } else {
         Comparer::Synthetic {
-            oracle: SyntheticOracle::new(run.theta_true().to_vec()),
+            oracle: Box::new(SimulatedTeacher::new(
+                run.theta_true().to_vec(),
+                run.config().teacher,
+                run.teacher_seed(),
+                run.pool(),
+            )),
             graph,
         }
     };
@@ -156,9 +166,9 @@ fn drive(
     let sink = trainer.asker.sink.clone();
     while (run.queries() as u64) < spec.budget {
         if let Some(h) = trainer.asker.controls.poll() {
-            if h == Halt::Shutdown {
-                sink.send(SessionEvent::Checkpoint(preference_checkpoint(&run)));
-            }
+            // Between queries the posterior is whole: keep it (a stopped session's too, so its
+            // posterior can be exported).
+            sink.send(SessionEvent::Checkpoint(preference_checkpoint(&run)));
             return Ok(halt_ending(h));
         }
         let progress = run.queries() as u64;

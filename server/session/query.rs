@@ -44,6 +44,53 @@ pub enum QueryContent {
     },
 }
 
+/// What the learner saw at a query, kept with it for datasets (`queries.data`): an evaluative
+/// query's transition, or a preference query's two segments.
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum QueryData {
+    Evaluative {
+        observation: Vec<f32>,
+        /// Normalised to [-1, 1].
+        action: Vec<f32>,
+        /// The env's reward for the step.
+        reward: f32,
+        next_observation: Vec<f32>,
+    },
+    Preference {
+        left: SegmentData,
+        right: SegmentData,
+    },
+}
+
+/// One side of a preference query.
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct SegmentData {
+    pub trajectory: usize,
+    pub start: usize,
+    /// Exclusive.
+    pub end: usize,
+    /// Its abstract state (none for windows and whole trajectories).
+    pub abstract_state: Option<u32>,
+    /// Standardised mean features, as the belief sees them.
+    pub features: Vec<f64>,
+    /// Mean features before standardisation.
+    pub raw_features: Vec<f64>,
+}
+
+impl SegmentData {
+    pub fn of(clip: &pool::Clip) -> Self {
+        Self {
+            trajectory: clip.trajectory,
+            start: clip.start,
+            end: clip.end,
+            abstract_state: clip.abstract_state.map(|s| s.0),
+            features: clip.features.clone(),
+            raw_features: clip.raw_features.clone(),
+        }
+    }
+}
+
 /// The latest frames of the current episode, for the clip of an evaluative query.
 pub struct FrameHistory {
     capacity: usize,

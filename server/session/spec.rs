@@ -220,8 +220,31 @@ impl SessionSpec {
                 "env_timeout_s applies to sessions on a remote env (env: {\"url\": ...})".into(),
             );
         }
-        self.settings()?;
-        self.run_config()?;
+        let settings = self.settings()?;
+        let kind = self.method.query_kind();
+        if !settings.combine.fits(kind) {
+            return Err(format!(
+                "combine: {} does not combine {} answers (evaluative: majority or mean; preference: each)",
+                settings.combine.as_str(),
+                kind.as_str()
+            ));
+        }
+        if settings.answers_per_query > 1 && self.trainer != TrainerKind::Human {
+            return Err(format!(
+                "answers_per_query = {}: several answers per query come from people; this session's trainer is synthetic",
+                settings.answers_per_query
+            ));
+        }
+        let teacher = match self.run_config()? {
+            RunConfig::Evaluative(c) => c.teacher,
+            RunConfig::Preference(c) => c.teacher,
+        };
+        if !teacher.is_perfect() && self.trainer == TrainerKind::Human {
+            return Err(
+                "teacher_* settings give the synthetic trainer faults; this session's trainer is human"
+                    .into(),
+            );
+        }
         Ok(())
     }
 }
@@ -297,6 +320,53 @@ mod tests {
         assert_eq!(config.env.variant, crate::sim::Variant::Uniform);
         assert_eq!(config.query_rule.c, 0.5);
         assert_eq!(config.seed, 1);
+    }
+
+    #[test]
+    fn several_answers_and_teacher_faults_go_with_the_right_trainer_and_family() {
+        let synthetic = |method: &str, params| SessionSpec {
+            trainer: TrainerKind::Synthetic,
+            ..spec(method, params)
+        };
+        spec(
+            "dref",
+            json!({"answers_per_query": 2, "combine": "majority"}),
+        )
+        .validate()
+        .unwrap();
+        spec("drpl", json!({"answers_per_query": 3, "combine": "each"}))
+            .validate()
+            .unwrap();
+        for (method, params) in [
+            ("dref", json!({"answers_per_query": 2, "combine": "each"})),
+            ("drpl", json!({"answers_per_query": 2, "combine": "mean"})),
+            ("dref", json!({"answers_per_query": 2})),
+            ("dref", json!({"combine": "majority"})),
+            ("dref", json!({"teacher_error": 0.1})),
+        ] {
+            assert!(
+                spec(method, params.clone()).validate().is_err(),
+                "{method} {params}"
+            );
+        }
+        assert!(
+            synthetic("dref", json!({"answers_per_query": 2, "combine": "mean"}))
+                .validate()
+                .is_err()
+        );
+        synthetic("dref", json!({"teacher_error": 0.1, "teacher_beta": 5}))
+            .validate()
+            .unwrap();
+        synthetic("drpl", json!({"teacher_beta": 2, "teacher_gamma": 0.9}))
+            .validate()
+            .unwrap();
+        // The offered defaults (a perfect teacher) are fine for people too.
+        spec(
+            "dref",
+            json!({"teacher_beta": "rational", "teacher_error": 0, "teacher_skip": "never"}),
+        )
+        .validate()
+        .unwrap();
     }
 
     #[test]

@@ -242,3 +242,71 @@ fn kernels_are_a_session_setting_and_nonsense_is_refused() {
         assert!(err.contains("kernels"), "{bad}: {err}");
     }
 }
+
+#[test]
+fn teacher_faults_and_a_persons_pace_reach_the_runs() {
+    let s = Settings::from_json(json!({
+        "teacher_beta": 5, "teacher_gamma": 0.9, "teacher_error": 0.2,
+        "teacher_skip": -1.5, "teacher_equal": 0.01, "max_queries_per_minute": 6, "pace_hz": 10
+    }))
+    .unwrap();
+    let c = dref(Task::Reaching, &s).unwrap();
+    assert_eq!(c.teacher.beta, Some(5.0));
+    assert_eq!((c.teacher.gamma, c.teacher.error), (Some(0.9), 0.2));
+    assert_eq!((c.teacher.skip, c.teacher.equal), (Some(-1.5), 0.01));
+    let pace = c.human_pace.unwrap();
+    assert_eq!((pace.max_per_minute, pace.steps_per_minute), (6, 600));
+    let p = Settings::from_json(json!({"teacher_beta": 2, "teacher_error": 0.1}))
+        .unwrap()
+        .preference(Task::Placing, QueryMethod::Drpl, 0)
+        .unwrap();
+    assert_eq!((p.teacher.beta, p.teacher.error), (Some(2.0), 0.1));
+    // The words for "no fault", and 0 for "no limit", leave the paper's runs as they were.
+    let perfect = Settings::from_json(json!({
+        "teacher_beta": "rational", "teacher_skip": "never", "teacher_gamma": 1,
+        "teacher_error": 0, "max_queries_per_minute": 0
+    }))
+    .unwrap();
+    assert_eq!(
+        dref(Task::Reaching, &perfect).unwrap(),
+        EvaluativeRunConfig::new(Task::Reaching, EvaluativeMethod::Dref, 0)
+    );
+    for bad in [
+        json!({"teacher_error": 1.0}),
+        json!({"teacher_gamma": 0}),
+        json!({"teacher_gamma": 1.5}),
+        json!({"teacher_beta": -2}),
+    ] {
+        let s = Settings::from_json(bad.clone()).unwrap();
+        assert!(dref(Task::Reaching, &s).is_err(), "{bad}");
+    }
+    assert!(Settings::from_json(json!({"teacher_beta": "sometimes"})).is_err());
+    let paced = Settings::from_json(json!({"max_queries_per_minute": 3})).unwrap();
+    assert!(
+        paced
+            .preference(Task::Reaching, QueryMethod::Drpl, 0)
+            .is_err()
+    );
+}
+
+#[test]
+fn answers_per_query_needs_a_rule_and_the_rule_needs_several_answers() {
+    let session = |v: serde_json::Value| Settings::from_json(v).unwrap().session();
+    let s = session(json!({"answers_per_query": 3, "combine": "mean"})).unwrap();
+    assert_eq!((s.answers_per_query, s.combine), (3, Combine::Mean));
+    assert_eq!(session(json!({})).unwrap().combine, Combine::First);
+    for bad in [
+        json!({"answers_per_query": 0}),
+        json!({"answers_per_query": 2}),
+        json!({"answers_per_query": 2, "combine": "first"}),
+        json!({"combine": "majority"}),
+    ] {
+        assert!(session(bad.clone()).is_err(), "{bad}");
+    }
+    assert_eq!(
+        Settings::from_json(json!({"answers_per_query": 2, "combine": "each"}))
+            .unwrap()
+            .session_keys_set(),
+        vec!["answers_per_query", "combine"]
+    );
+}

@@ -1,4 +1,5 @@
-//! The closed sets stored as text columns (`queries.kind`, `answers.who`, `sessions.status`),
+//! The closed sets stored as text columns (`queries.kind`, `answers.who`, `sessions.status`,
+//! `trainers.origin`),
 //! bound and read as their enums: a value outside the set is an error where it is read, not a
 //! string passed along.
 
@@ -7,7 +8,7 @@ use sqlx::encode::IsNull;
 use sqlx::error::BoxDynError;
 use sqlx::sqlite::{SqliteArgumentsBuffer, SqliteTypeInfo, SqliteValueRef};
 
-use super::Status;
+use super::{Status, TrainerOrigin};
 use crate::session::{Answerer, QueryKind};
 
 /// `sqlx::Type`, `Encode` and `Decode` for an enum with `as_str` and `parse`, as TEXT.
@@ -35,4 +36,4 @@ macro_rules! text_column {
     )*};
 }
 
-text_column!(QueryKind, Answerer, Status);
+text_column!(QueryKind, Answerer, Status, TrainerOrigin);

@@ -7,7 +7,10 @@
 //! - `answer_revisions`: undos and the answers given after them.
 //! - `episodes`: finished episodes' metrics.
 //! - `checkpoints`: where a session was, and the learner's digest.
+//! - `datasets`: answered queries with what the learner saw, for Parquet exports.
 //! - `surveys`: the trainer's answers to the paper's three questions.
+//! - `trainers`: named trainers, each one's own answers (sessions that combine several per
+//!   query) and surveys.
 //! - `alignments`: a preference session's alignment after every answer.
 
 /// The current time as the RFC 3339 text every table stores (UTC, milliseconds), as a literal
@@ -21,11 +24,13 @@ macro_rules! now {
 mod alignments;
 mod checkpoints;
 mod columns;
+mod datasets;
 mod episodes;
 mod queries;
 mod revisions;
 mod sessions;
 mod surveys;
+mod trainers;
 
 use std::path::Path;
 use std::str::FromStr;
@@ -36,11 +41,15 @@ use sqlx::sqlite::SqliteConnectOptions;
 
 pub use alignments::AlignmentRow;
 pub use checkpoints::CheckpointRow;
+pub use datasets::DatasetRow;
 pub use episodes::EpisodeRow;
 pub use queries::{AnswerCounts, AnswerRow, CommitOutcome, QueryRow, SyntheticAnswer};
 pub use revisions::{ReanswerOutcome, UndoOutcome};
 pub use sessions::{NewSession, SessionRow, Status};
 pub use surveys::Survey;
+pub use trainers::{
+    AddTrainer, PersonAnswer, TrainerOrigin, TrainerRef, TrainerRow, VoteOutcome, check_name,
+};
 
 /// The database file inside the data dir.
 pub const DB_FILE: &str = "dualrep.db";

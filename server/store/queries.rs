@@ -30,6 +30,10 @@ pub struct AnswerRow {
     pub abstract_state: i64,
     pub value: AnswerValue,
     pub who: Answerer,
+    /// The named trainer who gave it (`who` = trainer); none for the anonymous trainer, the
+    /// synthetic one, a timeout and several trainers' combined answers.
+    pub trainer: Option<String>,
+    pub trainer_id: Option<i64>,
     pub asked_at: String,
     pub answered_at: String,
     pub latency_ms: i64,
@@ -54,6 +58,8 @@ pub struct SyntheticAnswer {
     pub step: u64,
     pub abstract_state: u32,
     pub value: AnswerValue,
+    /// What the learner saw (JSON, see `queries.data`).
+    pub data: Option<String>,
 }
 
 pub(super) fn value_json(v: AnswerValue) -> String {
@@ -77,7 +83,8 @@ impl Store {
     }
 
     /// Store a query (or find it again: a resumed session re-asks an unanswered query with the
-    /// same `seq`) and return its id.
+    /// same `seq`) with what the learner saw (`data`, JSON) and return its id.
+    #[allow(clippy::too_many_arguments)]
     pub async fn upsert_query(
         &self,
         session_id: &str,
@@ -86,11 +93,12 @@ impl Store {
         step: u64,
         abstract_state: u32,
         payload: &str,
+        data: Option<&str>,
     ) -> Result<i64> {
         let row =
             sqlx::query(concat!(
-            "INSERT INTO queries (session_id, seq, kind, step, abstract_state, payload, asked_at)
-             VALUES (?, ?, ?, ?, ?, ?, ", now!(), ")
+            "INSERT INTO queries (session_id, seq, kind, step, abstract_state, payload, data, asked_at)
+             VALUES (?, ?, ?, ?, ?, ?, ?, ", now!(), ")
              ON CONFLICT (session_id, seq) DO UPDATE SET asked_at = excluded.asked_at
              RETURNING id"
         ))
@@ -100,6 +108,7 @@ impl Store {
             .bind(step as i64)
             .bind(i64::from(abstract_state))
             .bind(payload)
+            .bind(data)
             .fetch_one(self.writer())
             .await?;
         Ok(row.get("id"))
@@ -126,14 +135,16 @@ impl Store {
         }))
     }
 
-    /// Commit an answer; returns only after the transaction is durable. Answers committing at
-    /// the same moment share one transaction (and one fsync): see `group_commit`.
+    /// Commit an answer (by a named trainer: `trainer`); returns only after the transaction is
+    /// durable. Answers committing at the same moment share one transaction (and one fsync):
+    /// see `group_commit`.
     pub async fn commit_answer(
         &self,
         query_id: i64,
         session_id: &str,
         value: AnswerValue,
         who: Answerer,
+        trainer: Option<i64>,
         latency_ms: u64,
     ) -> Result<CommitOutcome> {
         let (reply, outcome) = tokio::sync::oneshot::channel();
@@ -142,6 +153,7 @@ impl Store {
             session_id: session_id.to_string(),
             value,
             who,
+            trainer,
             latency_ms,
             reply,
         };
@@ -170,14 +182,15 @@ impl Store {
         let mut tx = self.writer().begin().await?;
         for a in batch {
             let id: Option<i64> = sqlx::query(concat!(
-                "INSERT INTO queries (session_id, seq, kind, step, abstract_state, payload, asked_at)
-                 VALUES (?, ?, ?, ?, ?, '{}', ", now!(), ") ON CONFLICT (session_id, seq) DO NOTHING RETURNING id"
+                "INSERT INTO queries (session_id, seq, kind, step, abstract_state, payload, data, asked_at)
+                 VALUES (?, ?, ?, ?, ?, '{}', ?, ", now!(), ") ON CONFLICT (session_id, seq) DO NOTHING RETURNING id"
             ))
             .bind(session_id)
             .bind(a.seq as i64)
             .bind(a.kind)
             .bind(a.step as i64)
             .bind(i64::from(a.abstract_state))
+            .bind(a.data.as_deref())
             .fetch_optional(&mut *tx)
             .await?
             .map(|r| r.get("id"));
@@ -226,8 +239,9 @@ impl Store {
     pub async fn answers(&self, session_id: &str) -> Result<Vec<AnswerRow>> {
         let rows = sqlx::query(
             "SELECT q.seq, q.kind, q.step, q.abstract_state, q.asked_at,
-                    a.value, a.who, a.answered_at, a.latency_ms, a.revision
+                    a.value, a.who, a.answered_at, a.latency_ms, a.revision, a.trainer_id, t.name
              FROM answers a JOIN queries q ON q.id = a.query_id
+             LEFT JOIN trainers t ON t.id = a.trainer_id
              WHERE a.session_id = ? ORDER BY q.seq",
         )
         .bind(session_id)
@@ -242,6 +256,8 @@ impl Store {
                 abstract_state: r.get("abstract_state"),
                 value: parse_value(r.get("value")),
                 who: r.get("who"),
+                trainer: r.get("name"),
+                trainer_id: r.get("trainer_id"),
                 asked_at: r.get("asked_at"),
                 answered_at: r.get("answered_at"),
                 latency_ms: r.get("latency_ms"),
@@ -250,12 +266,12 @@ impl Store {
             .collect())
     }
 
-    /// Answers per source (`trainer`, `synthetic`, `timeout`) and how many were "no feedback"
+    /// Answers per source (`trainer`, `trainers`, `synthetic`, `timeout`) and how many were "no feedback"
     /// (value 0) or skips, for the session's summary.
     pub async fn answer_counts(&self, session_id: &str) -> Result<AnswerCounts> {
         let r = sqlx::query(
             "SELECT COUNT(*) AS total,
-                    COALESCE(SUM(who = 'trainer'), 0) AS by_trainer,
+                    COALESCE(SUM(who IN ('trainer', 'trainers')), 0) AS by_trainer,
                     COALESCE(SUM(who = 'timeout'), 0) AS timeouts,
                     COALESCE(SUM(value IN ('0', '\"skip\"')), 0) AS no_feedback
              FROM answers WHERE session_id = ?",
@@ -289,7 +305,7 @@ impl Store {
         let r = sqlx::query(
             "SELECT (julianday(MAX(a.answered_at)) - julianday(MIN(q.asked_at))) * 86400.0 AS seconds
              FROM answers a JOIN queries q ON q.id = a.query_id
-             WHERE a.session_id = ? AND a.who IN ('trainer', 'timeout')",
+             WHERE a.session_id = ? AND a.who IN ('trainer', 'trainers', 'timeout')",
         )
         .bind(session_id)
         .fetch_one(self.pool())
@@ -304,6 +320,7 @@ pub(super) struct CommitRequest {
     session_id: String,
     value: AnswerValue,
     who: Answerer,
+    trainer: Option<i64>,
     latency_ms: u64,
     reply: tokio::sync::oneshot::Sender<Result<CommitOutcome>>,
 }
@@ -350,13 +367,14 @@ async fn commit_batch(
     batch: &[CommitRequest],
 ) -> Result<Vec<CommitOutcome>> {
     let mut insert = sqlx::QueryBuilder::<sqlx::Sqlite>::new(
-        "INSERT INTO answers (query_id, session_id, value, who, latency_ms, answered_at) ",
+        "INSERT INTO answers (query_id, session_id, value, who, trainer_id, latency_ms, answered_at) ",
     );
     insert.push_values(batch, |mut row, r| {
         row.push_bind(r.query_id)
             .push_bind(r.session_id.clone())
             .push_bind(value_json(r.value))
             .push_bind(r.who)
+            .push_bind(r.trainer)
             .push_bind(r.latency_ms as i64)
             .push(now!());
     });

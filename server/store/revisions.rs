@@ -31,17 +31,19 @@ pub enum ReanswerOutcome {
 }
 
 impl Store {
-    /// Take back the answer to `query_id`; until it is answered again it stands as
-    /// `AnswerValue::timeout(kind)` ("no feedback" or a skip, what the learner uses meanwhile).
+    /// Take back the answer to `query_id` (by the named trainer `by`, if one); until it is
+    /// answered again it stands as `AnswerValue::timeout(kind)` ("no feedback" or a skip, what
+    /// the learner uses meanwhile).
     pub async fn undo_answer(
         &self,
         query_id: i64,
         session_id: &str,
         kind: QueryKind,
+        by: Option<i64>,
     ) -> Result<UndoOutcome> {
         let mut tx = self.writer().begin().await?;
         let Some(row) = sqlx::query(
-            "SELECT value, who, latency_ms, revision FROM answers
+            "SELECT value, who, trainer_id, latency_ms, revision FROM answers
              WHERE query_id = ? AND session_id = ?",
         )
         .bind(query_id)
@@ -58,6 +60,7 @@ impl Store {
                 revision: 0,
                 value: Some(row.get("value")),
                 who: row.get("who"),
+                trainer: row.get("trainer_id"),
                 latency_ms: row.get("latency_ms"),
             };
             original.insert(&mut tx, query_id, session_id).await?;
@@ -69,6 +72,7 @@ impl Store {
             revision: next,
             value: None,
             who: Answerer::Trainer,
+            trainer: by,
             latency_ms: 0,
         };
         undo.insert(&mut tx, query_id, session_id).await?;
@@ -82,12 +86,14 @@ impl Store {
         Ok(UndoOutcome::Undone(next as u32))
     }
 
-    /// Answer a query whose answer was undone; returns after the commit.
+    /// Answer a query whose answer was undone (by the named trainer `trainer`, if one);
+    /// returns after the commit.
     pub async fn reanswer(
         &self,
         query_id: i64,
         value: AnswerValue,
         who: Answerer,
+        trainer: Option<i64>,
         latency_ms: u64,
     ) -> Result<ReanswerOutcome> {
         let mut tx = self.writer().begin().await?;
@@ -104,17 +110,19 @@ impl Store {
             revision: next,
             value: Some(value_json(value)),
             who,
+            trainer,
             latency_ms: latency_ms as i64,
         };
         let session_id: String = row.get("session_id");
         again.insert(&mut tx, query_id, &session_id).await?;
         sqlx::query(concat!(
-            "UPDATE answers SET value = ?, who = ?, latency_ms = ?, revision = ?, answered_at = ",
+            "UPDATE answers SET value = ?, who = ?, trainer_id = ?, latency_ms = ?, revision = ?, answered_at = ",
             now!(),
             " WHERE query_id = ?"
         ))
         .bind(value_json(value))
         .bind(who)
+        .bind(trainer)
         .bind(latency_ms as i64)
         .bind(next)
         .bind(query_id)
@@ -179,6 +187,8 @@ struct RevisionRow {
     /// JSON; `None` for an undo.
     value: Option<String>,
     who: Answerer,
+    /// The named trainer, if one.
+    trainer: Option<i64>,
     latency_ms: i64,
 }
 
@@ -191,8 +201,8 @@ impl RevisionRow {
     ) -> Result<()> {
         sqlx::query(concat!(
             "INSERT INTO answer_revisions
-               (query_id, session_id, revision, value, who, latency_ms, applied_at, created_at)
-             VALUES (?, ?, ?, ?, ?, ?, NULL, ",
+               (query_id, session_id, revision, value, who, trainer_id, latency_ms, applied_at, created_at)
+             VALUES (?, ?, ?, ?, ?, ?, ?, NULL, ",
             now!(),
             ")"
         ))
@@ -201,6 +211,7 @@ impl RevisionRow {
         .bind(self.revision)
         .bind(self.value.as_deref())
         .bind(self.who)
+        .bind(self.trainer)
         .bind(self.latency_ms)
         .execute(tx)
         .await?;

@@ -14,7 +14,7 @@ use tokio::sync::broadcast::error::RecvError;
 use crate::http::AppState;
 use crate::http::auth::SessionAccess;
 use crate::http::error::ApiError;
-use crate::hub::{AnswerReply, Joined, SessionHandle};
+use crate::hub::{AnswerReply, Identity, Joined, SessionHandle};
 use crate::protocol::{
     ClientMessage, ErrorCode, ProtocolError, QueryId, QueryKind, ServerMessage, id_of, parse_client,
 };
@@ -44,7 +44,7 @@ const ANSWER_BURST: f64 = 40.0;
 )]
 pub async fn upgrade(
     State(state): State<AppState>,
-    SessionAccess(row): SessionAccess,
+    SessionAccess(row, who): SessionAccess,
     ws: Result<WebSocketUpgrade, WebSocketUpgradeRejection>,
 ) -> Response {
     let ws = match ws {
@@ -55,7 +55,7 @@ pub async fn upgrade(
     };
     ws.max_message_size(MAX_MESSAGE_BYTES)
         .max_frame_size(MAX_MESSAGE_BYTES)
-        .on_upgrade(move |socket| serve(state, row, socket))
+        .on_upgrade(move |socket| serve(state, row, who, socket))
 }
 
 fn text(s: &str) -> Message {
@@ -64,6 +64,7 @@ fn text(s: &str) -> Message {
 
 fn hello(
     row: &SessionRow,
+    who: &Identity,
     geometry: Option<crate::sim::Geometry>,
     live_graph: Option<SceneGraph>,
     status: crate::store::Status,
@@ -74,10 +75,13 @@ fn hello(
     let graph = live_graph
         .or_else(|| spec.as_ref().and_then(|s| s.scene_graph().ok()))
         .unwrap_or(SceneGraph::Declared(&[]));
-    let pace_hz = spec
+    let settings = spec.as_ref().and_then(|s| s.settings().ok());
+    let pace_hz = settings
         .as_ref()
-        .and_then(|s| s.settings().ok())
         .map_or(crate::session::spec::DEFAULT_PACE_HZ, |s| s.pace_hz);
+    let (answers_per_query, combine) = settings.as_ref().map_or((1, Default::default()), |s| {
+        (s.answers_per_query, s.combine)
+    });
     let kind = spec.map_or(QueryKind::Evaluative, |s| s.method.query_kind());
     ServerMessage::Hello {
         session: row.id.clone(),
@@ -89,6 +93,9 @@ fn hello(
         geometry,
         budget: row.budget as u64,
         pace_hz,
+        trainer: who.trainer().cloned(),
+        answers_per_query,
+        combine,
     }
 }
 
@@ -120,14 +127,16 @@ impl RateLimit {
     }
 }
 
-async fn serve(state: AppState, row: SessionRow, mut socket: WebSocket) {
+async fn serve(state: AppState, row: SessionRow, who: Identity, mut socket: WebSocket) {
     let session = state.hub.session(&row.id);
     let snapshot = session.as_ref().map(SessionHandle::snapshot);
     let status = snapshot.as_ref().map_or(row.status, |s| s.status);
     let live_graph = snapshot.as_ref().and_then(|s| s.graph);
     let geometry = snapshot.and_then(|s| s.geometry);
     if socket
-        .send(text(&hello(&row, geometry, live_graph, status).to_text()))
+        .send(text(
+            &hello(&row, &who, geometry, live_graph, status).to_text(),
+        ))
         .await
         .is_err()
     {
@@ -135,7 +144,7 @@ async fn serve(state: AppState, row: SessionRow, mut socket: WebSocket) {
     }
     // Joined atomically: the catch-up, then every broadcast after it, nothing between.
     let joined = match &session {
-        Some(s) if status.is_active() => s.join().await.map(|j| (s, j)),
+        Some(s) if status.is_active() => s.join(&who).await.map(|j| (s, j)),
         _ => None,
     };
     let Some((
@@ -173,7 +182,7 @@ async fn serve(state: AppState, row: SessionRow, mut socket: WebSocket) {
                 // Too slow for the frame rate: join again, which re-sends what must not be
                 // missed.
                 Err(RecvError::Lagged(_)) => {
-                    let Some(again) = session.join().await else { return };
+                    let Some(again) = session.join(&who).await else { return };
                     rx = again.broadcast;
                     for m in again.catch_up {
                         if socket.send(text(&m)).await.is_err() {
@@ -186,7 +195,7 @@ async fn serve(state: AppState, row: SessionRow, mut socket: WebSocket) {
             },
             incoming = socket.recv() => {
                 let reply = match incoming {
-                    Some(Ok(Message::Text(t))) => handle(session, &mut limit, t.as_str()).await,
+                    Some(Ok(Message::Text(t))) => handle(session, &who, &mut limit, t.as_str()).await,
                     Some(Ok(Message::Binary(_))) => Some(ProtocolError::new(ErrorCode::BadMessage, "binary messages are not part of the protocol; send JSON text").to_message(None)),
                     Some(Ok(_)) => None, // ping / pong (answered by axum)
                     // Closed, or a protocol violation such as an oversized message.
@@ -223,7 +232,12 @@ fn session_ended(id: Option<QueryId>) -> ServerMessage {
     ProtocolError::session_ended().to_message(id)
 }
 
-async fn handle(session: &SessionHandle, limit: &mut RateLimit, t: &str) -> Option<ServerMessage> {
+async fn handle(
+    session: &SessionHandle,
+    who: &Identity,
+    limit: &mut RateLimit,
+    t: &str,
+) -> Option<ServerMessage> {
     let message = match parse_client(t) {
         Ok(m) => m,
         Err(e) => return Some(e.to_message(id_of(t))),
@@ -241,12 +255,12 @@ async fn handle(session: &SessionHandle, limit: &mut RateLimit, t: &str) -> Opti
         );
     }
     match message {
-        ClientMessage::Answer { id, value } => Some(match session.answer(id, value).await {
+        ClientMessage::Answer { id, value } => Some(match session.answer(id, value, who).await {
             AnswerReply::Ack(value) => ServerMessage::Ack { id, value },
             AnswerReply::Refused(e) => e.to_message(Some(id)),
         }),
         // On success every page gets `undone` and the query again, by broadcast.
-        ClientMessage::Undo { id } => match session.undo(id).await {
+        ClientMessage::Undo { id } => match session.undo(id, who).await {
             Ok(()) => None,
             Err(e) => Some(e.to_message(Some(id))),
         },

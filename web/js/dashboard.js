@@ -1,5 +1,6 @@
 // The dashboard (/): researcher token, launch form built from GET /api/tasks, the sessions
-// table with live status, and live plots of the selected session.
+// table with live status, live plots of the selected session, and its named trainers (invite
+// one: a link of their own).
 
 import { ApiError, download, getJson, getToken, postJson, setToken } from "./api.js";
 import { notify, notifyError } from "./notify.js";
@@ -295,6 +296,7 @@ async function showDetail() {
   const fb = last ? ` (feedback ${fmtPct(last.feedback_fraction)})` : "";
   linePlot($("plot-reward"), [{ label: `${s.method}${fb}`, points: episodes.map((e) => [e.step, e.cumulative_return]) }], { xLabel: "steps", height: 160, empty: pref ? "preference sessions have no episodes" : "no finished episode yet" });
   linePlot($("plot-returns"), [{ points: episodes.map((e) => [e.episode, e.return]) }], { xLabel: "episode", height: 160, empty: pref ? "preference sessions have no episodes" : "no finished episode yet" });
+  showTrainerLinks(s);
   if (pref) {
     let curve = [];
     try {
@@ -310,7 +312,52 @@ async function showDetail() {
   }
 }
 
+// ---- named trainers -------------------------------------------------------------------------
+
+async function showTrainerLinks(s) {
+  const human = s.trainer === "human";
+  $("invite-box").classList.toggle("hidden", !human);
+  if (!human) return;
+  let trainers = [];
+  try {
+    trainers = await getJson(`/api/sessions/${s.id}/trainers`);
+  } catch (e) {
+    notify(`The trainers could not be loaded: ${e.message}`, { kind: "error", key: "trainers" });
+  }
+  const list = $("trainer-links");
+  list.replaceChildren(
+    ...trainers.map((t) => {
+      const li = document.createElement("li");
+      li.dataset.trainer = t.name ?? "";
+      const who = Object.assign(document.createElement("strong"), { textContent: t.name ?? "anonymous" });
+      li.append(who, `${t.answers} answers`);
+      if (t.trainer_url) {
+        const link = new URL(t.trainer_url, location.origin).href;
+        li.append(Object.assign(document.createElement("a"), { href: link, target: "_blank", textContent: "their link", className: "trainer-link" }));
+      }
+      return li;
+    }),
+  );
+}
+
+async function invite(ev) {
+  ev.preventDefault();
+  const s = state.sessions.find((x) => x.id === state.selected);
+  const name = $("invite-name").value.trim();
+  if (!s || !name) return;
+  try {
+    const t = await postJson(`/api/sessions/${s.id}/trainers`, { name });
+    $("invite-name").value = "";
+    notify(`${t.name} is invited: send them their link.`, { kind: "ok" });
+    await showTrainerLinks(s);
+  } catch (e) {
+    notifyError(e, "Not invited");
+  }
+}
+
 // ---- start ----------------------------------------------------------------------------------
+
+$("invite-form").addEventListener("submit", invite);
 
 $("login-form").addEventListener("submit", (ev) => {
   ev.preventDefault();

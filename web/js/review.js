@@ -1,6 +1,7 @@
-// The review page (/review/{session}): the session's metrics (T, NFC, the three answers), its
-// episodes with returns and a replay on the canvas, every query's answer and latency on a
-// timeline, and the recording for the Rerun viewer.
+// The review page (/review/{session}): the session's metrics (T, NFC, the three answers), the
+// same per trainer with how much the trainers agree, its episodes with returns and a replay on
+// the canvas, every query's answer, who gave it and its latency on a timeline, and the
+// recording for the Rerun viewer.
 
 import { ApiError, download, getJson, getToken, setToken } from "./api.js";
 import { notify } from "./notify.js";
@@ -28,7 +29,56 @@ function metric(dl, label, value) {
 }
 
 function valueWords(v) {
+  if (v && typeof v === "object" && v.tally) {
+    return Object.entries(v.tally).filter(([, n]) => n > 0).map(([k, n]) => `${n}× ${k}`).join(", ");
+  }
+  if (typeof v === "number" && !Number.isInteger(v)) return `${v.toFixed(2)} (mean)`;
   return { 1: "+1 good", 0: "0 no feedback", "-1": "−1 bad", left: "left", right: "right", equal: "about equal", skip: "skip" }[String(v)] ?? String(v);
+}
+
+const MEASURES = { krippendorff_alpha_ordinal: "Krippendorff's α (ordinal)", fleiss_kappa: "Fleiss' κ" };
+
+function showTrainers(trainers, agreement) {
+  const tbody = document.querySelector("#trainers tbody");
+  const surveyWords = (s) => (s ? `${s.overall_experience} / ${s.perceived_intelligence} / ${s.cognitive_ease}` : "–");
+  tbody.replaceChildren(
+    ...trainers.map((t) => {
+      const tr = document.createElement("tr");
+      tr.dataset.trainer = t.name ?? "";
+      tr.append(
+        text("td", t.name ?? "anonymous"),
+        text("td", String(t.answers), "num"),
+        text("td", String(t.no_feedback), "num"),
+        text("td", t.trainer_seconds == null ? "–" : `${t.trainer_seconds.toFixed(1)} s`, "num"),
+        text("td", t.latency_ms_median == null ? "–" : `${(t.latency_ms_median / 1000).toFixed(2)} s`, "num"),
+        text("td", surveyWords(t.survey)),
+      );
+      return tr;
+    }),
+  );
+  $("trainers-empty").classList.toggle("hidden", trainers.length > 0);
+  const box = $("agreement");
+  if (!agreement) {
+    box.textContent = "";
+    return;
+  }
+  const measure = MEASURES[agreement.measure] ?? agreement.measure;
+  box.replaceChildren();
+  if (agreement.value == null) {
+    box.append(`Agreement (${measure}): not defined yet (${agreement.units} quer${agreement.units === 1 ? "y" : "ies"} answered by two or more trainers).`);
+  } else {
+    box.append(`Agreement (${measure}): `, Object.assign(document.createElement("strong"), { id: "agreement-value", textContent: agreement.value.toFixed(3) }), ` over ${agreement.units} quer${agreement.units === 1 ? "y" : "ies"} answered by two or more trainers.`);
+  }
+  document.body.dataset.agreement = agreement.value == null ? "" : String(agreement.value);
+  const pairs = document.querySelector("#pairs tbody");
+  pairs.replaceChildren(
+    ...agreement.pairs.map((p) => {
+      const tr = document.createElement("tr");
+      tr.append(text("td", `${p.a_name} · ${p.b_name}`), text("td", String(p.units), "num"), text("td", p.value == null ? "–" : p.value.toFixed(3), "num"));
+      return tr;
+    }),
+  );
+  $("pairs").classList.toggle("hidden", agreement.pairs.length === 0);
 }
 
 // ---- replay ---------------------------------------------------------------------------------
@@ -133,15 +183,15 @@ function timeline(answers) {
     return e;
   };
   add("line", { x1: 30, y1: 45, x2: W - 30, y2: 45, stroke: "#c9c4b8" });
-  const color = (v) => (v === 1 || v === "left" ? "#2e7d4f" : v === -1 || v === "right" ? "#b3413b" : "#6b7280");
-  const y = (v) => (v === 1 || v === "left" ? 25 : v === -1 || v === "right" ? 65 : 45);
+  const color = (v) => (v === 1 || v === "left" || (typeof v === "number" && v > 0) ? "#2e7d4f" : v === -1 || v === "right" || (typeof v === "number" && v < 0) ? "#b3413b" : "#6b7280");
+  const y = (v) => (typeof v === "number" ? 45 - 20 * v : v === "left" ? 25 : v === "right" ? 65 : 45);
   for (const a of answers) {
     const xa = X(Date.parse(a.asked_at));
     const xb = X(Date.parse(a.answered_at));
     add("line", { x1: xa, y1: y(a.value), x2: Math.max(xb, xa + 1), y2: y(a.value), stroke: color(a.value), "stroke-width": 3, opacity: 0.4 });
     const c = add("circle", { cx: xb, cy: y(a.value), r: 5, fill: color(a.value) });
     const title = document.createElementNS(NS, "title");
-    title.textContent = `query ${a.query_id}: ${valueWords(a.value)} by ${a.who}, ${a.latency_ms} ms after it was asked`;
+    title.textContent = `query ${a.query_id}: ${valueWords(a.value)} by ${a.trainer ?? a.who}, ${a.latency_ms} ms after it was asked`;
     c.append(title);
   }
   const pos = answers[0].kind === "preference" ? ["left", "right"] : ["good", "bad"];
@@ -174,7 +224,8 @@ async function load() {
   $("title").textContent = `Review · ${session.task} · ${session.method} · ${session.id}`;
   $("status").textContent = session.status;
   $("status").className = `pill ${session.status}`;
-  const [episodes, answers] = await Promise.all([
+  const base = `/api/sessions/${encodeURIComponent(sessionId)}`;
+  const [episodes, answers, trainers, agreement] = await Promise.all([
     getJson(`/api/sessions/${encodeURIComponent(sessionId)}/episodes`).catch((e) => {
       notify(`The episodes could not be loaded: ${e.message}`, { kind: "error" });
       return [];
@@ -183,7 +234,16 @@ async function load() {
       notify(`The answers could not be loaded: ${e.message}`, { kind: "error" });
       return [];
     }),
+    getJson(`${base}/trainers`).catch((e) => {
+      notify(`The trainers could not be loaded: ${e.message}`, { kind: "error" });
+      return [];
+    }),
+    getJson(`${base}/agreement`).catch((e) => {
+      notify(`The agreement could not be loaded: ${e.message}`, { kind: "error" });
+      return null;
+    }),
   ]);
+  showTrainers(trainers, agreement);
   const dl = $("metrics");
   dl.replaceChildren();
   metric(dl, "Trainer", session.trainer);
@@ -191,7 +251,7 @@ async function load() {
   metric(dl, "Answers", String(session.answers?.total ?? answers.length));
   metric(dl, "No feedback (NFC)", String(session.answers?.no_feedback ?? 0));
   metric(dl, "Trainer time (T)", session.trainer_seconds == null ? "–" : `${session.trainer_seconds.toFixed(1)} s`);
-  const lat = answers.filter((a) => a.who === "trainer").map((a) => a.latency_ms).sort((a, b) => a - b);
+  const lat = answers.filter((a) => a.who === "trainer" || a.who === "trainers").map((a) => a.latency_ms).sort((a, b) => a - b);
   metric(dl, "Median latency", lat.length ? `${(lat[Math.floor(lat.length / 2)] / 1000).toFixed(2)} s` : "–");
   if (episodes.length) metric(dl, "Cumulative reward", episodes[episodes.length - 1].cumulative_return.toFixed(1));
   for (const [k, label] of Object.entries(SURVEY_WORDS)) {
@@ -223,7 +283,7 @@ async function load() {
     ...answers.map((a) => {
       const tr = document.createElement("tr");
       const cls = a.value === 1 || a.value === "left" ? "value-good" : a.value === -1 || a.value === "right" ? "value-bad" : "";
-      tr.append(text("td", String(a.query_id), "num"), text("td", a.kind), text("td", String(a.step), "num"), text("td", valueWords(a.value), cls), text("td", a.who), text("td", `${(a.latency_ms / 1000).toFixed(2)} s`, "num"), text("td", new Date(a.answered_at).toLocaleTimeString()));
+      tr.append(text("td", String(a.query_id), "num"), text("td", a.kind), text("td", String(a.step), "num"), text("td", valueWords(a.value), cls), text("td", a.trainer ?? a.who), text("td", `${(a.latency_ms / 1000).toFixed(2)} s`, "num"), text("td", new Date(a.answered_at).toLocaleTimeString()));
       return tr;
     }),
   );

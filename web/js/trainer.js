@@ -1,5 +1,8 @@
 // The trainer page (/train/{session}?token=...): the robot live, the queries with their clips,
-// answers by key or click, progress, undo, and the three questions at the end.
+// answers by key or click, progress, undo, and the three questions at the end. On the session's
+// shared link the page asks for a name: joining gives this person a link of their own (kept in
+// this browser), so every answer is stored with who gave it; sessions that take several
+// answers per query count only named trainers' answers.
 
 import { ClipLoop } from "./clip.js";
 import { notify } from "./notify.js";
@@ -18,7 +21,9 @@ const VALUE_WORDS = { 1: "Good", 0: "No feedback", "-1": "Bad", left: "Left", ri
 const $ = (id) => document.getElementById(id);
 
 const sessionId = decodeURIComponent(location.pathname.split("/").filter(Boolean)[1] || "");
-const token = new URLSearchParams(location.search).get("token") || "";
+const NAMED_KEY = `dualrep.trainer.${sessionId}`;
+// A trainer who named themself on this session before comes back under their own token.
+let token = localStorage.getItem(NAMED_KEY) || new URLSearchParams(location.search).get("token") || "";
 
 const page = {
   hello: null,
@@ -170,11 +175,13 @@ function recordAnswer(id, value) {
   $("history").prepend(li);
   page.history.unshift({ id, value, el: li });
   page.lastAnswer = { id, value, at: Date.now() };
-  notify(`Saved: ${VALUE_WORDS[String(value)] ?? value}.`, {
+  // Several trainers' answers combine and stand: no undo there.
+  const combined = (page.hello?.answers_per_query ?? 1) > 1;
+  notify(combined ? `Saved: ${VALUE_WORDS[String(value)] ?? value}. Waiting for the other trainers.` : `Saved: ${VALUE_WORDS[String(value)] ?? value}.`, {
     kind: "ok",
     timeoutMs: UNDO_WINDOW_MS,
     key: "answer",
-    action: { label: "Undo (U)", run: undo },
+    action: combined ? undefined : { label: "Undo (U)", run: undo },
   });
 }
 
@@ -276,6 +283,7 @@ function onMessage(msg) {
   switch (msg.type) {
     case "hello":
       page.hello = msg;
+      showWho(msg);
       {
         // A remote env's own task is called by its env's id, once the session has one.
         const name = msg.task === "remote" && msg.geometry?.env ? msg.geometry.env : TASK_NAMES[msg.task] ?? msg.task;
@@ -331,6 +339,12 @@ function onError(msg) {
     case "undo_unavailable":
       notify(`Could not undo: ${msg.message}`, { kind: "info", key: "answer" });
       return;
+    case "identity_required":
+      if (mine) reenable();
+      $("name-form").classList.remove("hidden");
+      $("name").focus();
+      notify(msg.message, { kind: "info" });
+      return;
     case "store_failed":
     case "rate_limited":
       if (mine) reenable();
@@ -364,6 +378,49 @@ function onSocketState(state, info) {
   }
 }
 
+// ---- who is answering -----------------------------------------------------------------------
+
+function showWho(hello) {
+  const named = hello.trainer;
+  $("who").classList.toggle("hidden", !named);
+  if (named) {
+    $("who").textContent = `You: ${named.name}`;
+    document.body.dataset.trainer = named.name;
+  }
+  const ended = ["finished", "failed", "stopped", "interrupted"].includes(hello.status);
+  const ask = !named && !ended;
+  $("name-form").classList.toggle("hidden", !ask);
+  $("name-why").textContent =
+    hello.answers_per_query > 1
+      ? `This session asks ${hello.answers_per_query} people each question: give your name to answer.`
+      : "Give your name so that your answers are yours (or just answer).";
+}
+
+async function joinWithName(ev) {
+  ev.preventDefault();
+  const name = $("name").value.trim();
+  if (!name) return;
+  $("join").disabled = true;
+  try {
+    const me = await postJson(`/api/sessions/${encodeURIComponent(sessionId)}/join`, { name }, { token });
+    localStorage.setItem(NAMED_KEY, me.token);
+    history.replaceState(null, "", me.trainer_url);
+    token = me.token;
+    // Connect again as this trainer: hello names them, and the open question follows.
+    const old = page.socket;
+    old.onState = () => {};
+    old.onMessage = () => {};
+    old.close();
+    page.socket = new TrainerSocket(socketUrl(sessionId, token), { onMessage, onState: onSocketState });
+    page.socket.connect();
+    notify(`Welcome, ${me.name}.`, { kind: "ok" });
+  } catch (e) {
+    notify(`Could not join: ${e.message}`, { kind: "error" });
+  } finally {
+    $("join").disabled = false;
+  }
+}
+
 // ---- keys -----------------------------------------------------------------------------------
 
 function onKey(ev) {
@@ -392,6 +449,7 @@ function tickExpiry() {
 
 function start() {
   buildSurvey();
+  $("name-form").addEventListener("submit", joinWithName);
   for (const b of document.querySelectorAll(".answer")) {
     b.addEventListener("click", () => {
       const v = b.dataset.value;

@@ -109,6 +109,11 @@ impl QueryPool {
         self.trajectories[trajectory].phis.len()
     }
 
+    /// phi(s_{t+1}, a_t) of every step of `trajectory`, before standardisation.
+    pub fn step_features(&self, trajectory: usize) -> &[Vec<f64>] {
+        &self.trajectories[trajectory].phis
+    }
+
     pub fn segments(&self) -> &[Segment] {
         &self.segments
     }

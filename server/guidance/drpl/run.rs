@@ -19,6 +19,7 @@ use super::segments::DEFAULT_MIN_RUN;
 use super::selection::{QueryMethod, QueryPair, Selector};
 use super::trainer::{Preference, PreferenceQuery, PreferenceTrainer};
 use super::trajectories::{self, DEFAULT_TRAJECTORIES};
+use crate::guidance::teacher::TeacherFaults;
 use crate::scene_graph::SceneGraph;
 use crate::sim::{DeclaredTask, Env, EnvFault, EnvOptions, Start, Task, TaskRef};
 
@@ -26,6 +27,8 @@ use crate::sim::{DeclaredTask, Env, EnvFault, EnvOptions, Start, Task, TaskRef};
 const THETA_STREAM: u64 = 2;
 const SELECTION_STREAM: u64 = 3;
 const BELIEF_STREAM: u64 = 4;
+/// The simulated teacher's faults draw from this stream (`teacher_seed`).
+const TEACHER_STREAM: u64 = 5;
 
 /// Everything that defines a run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -45,6 +48,9 @@ pub struct PreferenceRunConfig {
     /// Which version of the task the trajectories come from (tasks.md).
     #[serde(default)]
     pub env: EnvOptions,
+    /// The synthetic teacher's faults (none: the paper's deterministic oracle).
+    #[serde(default, skip_serializing_if = "TeacherFaults::is_perfect")]
+    pub teacher: TeacherFaults,
 }
 
 impl PreferenceRunConfig {
@@ -67,6 +73,7 @@ impl PreferenceRunConfig {
                 start: (task != Task::LunarLander).then_some(Start::Uniform),
                 ..EnvOptions::default()
             },
+            teacher: TeacherFaults::default(),
         }
     }
 
@@ -116,13 +123,18 @@ pub struct PreferenceRun {
     in_belief: Vec<usize>,
 }
 
-/// What the belief learns from a preference (a skip teaches nothing).
-fn response(preference: Preference) -> Option<Response> {
-    match preference {
+/// What the belief learns from a preference: one observation per left, right or "about
+/// equal" (several for a tally of several trainers' answers); a skip teaches nothing.
+fn responses(preference: Preference) -> Vec<Response> {
+    let one = |p: Preference| match p {
         Preference::Left => Some(Response::First),
         Preference::Right => Some(Response::Second),
         Preference::Equal => Some(Response::Equal),
-        Preference::Skip => None,
+        Preference::Skip | Preference::Tally(_) => None,
+    };
+    match preference {
+        Preference::Tally(t) => t.answers().filter_map(one).collect(),
+        p => one(p).into_iter().collect(),
     }
 }
 
@@ -210,10 +222,13 @@ impl PreferenceRun {
             right: &pair.right,
             predicate: pair.predicate,
         });
-        let update_ms = response(preference).map(|r| {
-            self.belief
-                .add_answer(&pair.left.features, &pair.right.features, r);
-            self.in_belief.push(self.queries);
+        let learnt = responses(preference);
+        let update_ms = (!learnt.is_empty()).then(|| {
+            for r in learnt {
+                self.belief
+                    .add_answer(&pair.left.features, &pair.right.features, r);
+                self.in_belief.push(self.queries);
+            }
             let start = Instant::now();
             self.belief.update();
             start.elapsed().as_secs_f64() * 1e3
@@ -238,12 +253,13 @@ impl PreferenceRun {
             return false;
         };
         let mut changed = false;
-        if let Some(i) = self.in_belief.iter().position(|&q| q == query) {
+        // Every observation the query gave (a tally gives several), last first.
+        while let Some(i) = self.in_belief.iter().rposition(|&q| q == query) {
             self.belief.remove_answer(i);
             self.in_belief.remove(i);
             changed = true;
         }
-        if let Some(r) = response(preference) {
+        for r in responses(preference) {
             self.belief
                 .add_answer(&pair.left.features, &pair.right.features, r);
             self.in_belief.push(query);
@@ -274,6 +290,11 @@ impl PreferenceRun {
     /// Queries asked so far.
     pub fn queries(&self) -> usize {
         self.queries
+    }
+
+    /// The seed of the simulated teacher's own random stream (its faults), from the run's.
+    pub fn teacher_seed(&self) -> u64 {
+        stream(self.config.seed, TEACHER_STREAM).random()
     }
 
     pub fn alignment(&self) -> f64 {

@@ -15,6 +15,65 @@ pub enum Preference {
     Equal,
     /// The trainer declined to compare: recorded, nothing learnt.
     Skip,
+    /// Several trainers' answers to one query (a session that combines k answers `each`):
+    /// every left, right and "about equal" enters the belief as its own observation, as APReL
+    /// does with several users' answers.
+    Tally(PreferenceTally),
+}
+
+/// How many trainers chose each answer of one query.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, utoipa::ToSchema,
+)]
+#[serde(deny_unknown_fields)]
+pub struct PreferenceTally {
+    pub left: u8,
+    pub right: u8,
+    pub equal: u8,
+    pub skip: u8,
+}
+
+impl PreferenceTally {
+    /// The tally of `answers` (a tally among them adds its counts).
+    pub fn of(answers: &[Preference]) -> Self {
+        let mut t = Self::default();
+        for a in answers {
+            t.add(*a);
+        }
+        t
+    }
+
+    fn add(&mut self, p: Preference) {
+        match p {
+            Preference::Left => self.left += 1,
+            Preference::Right => self.right += 1,
+            Preference::Equal => self.equal += 1,
+            Preference::Skip => self.skip += 1,
+            Preference::Tally(t) => {
+                self.left += t.left;
+                self.right += t.right;
+                self.equal += t.equal;
+                self.skip += t.skip;
+            }
+        }
+    }
+
+    pub fn total(&self) -> u32 {
+        u32::from(self.left) + u32::from(self.right) + u32::from(self.equal) + u32::from(self.skip)
+    }
+
+    /// The single answers it counts, in a fixed order (left, right, equal, skip): the order in
+    /// which they enter the belief, so a replay reproduces the posterior.
+    pub fn answers(&self) -> impl Iterator<Item = Preference> + '_ {
+        [
+            (Preference::Left, self.left),
+            (Preference::Right, self.right),
+            (Preference::Equal, self.equal),
+            (Preference::Skip, self.skip),
+        ]
+        .into_iter()
+        .flat_map(|(p, n)| std::iter::repeat_n(p, usize::from(n)))
+    }
 }
 
 /// What the trainer is asked about.
@@ -132,6 +191,22 @@ mod tests {
                 Preference::Left
             );
         }
+    }
+
+    #[test]
+    fn a_tally_counts_and_lists_its_answers_in_a_fixed_order() {
+        let t = PreferenceTally::of(&[Preference::Right, Preference::Left, Preference::Right]);
+        assert_eq!((t.left, t.right, t.total()), (1, 2, 3));
+        assert_eq!(
+            t.answers().collect::<Vec<_>>(),
+            vec![Preference::Left, Preference::Right, Preference::Right]
+        );
+        let json = serde_json::to_string(&Preference::Tally(t)).unwrap();
+        assert_eq!(json, r#"{"tally":{"left":1,"right":2,"equal":0,"skip":0}}"#);
+        assert_eq!(
+            serde_json::from_str::<Preference>(&json).unwrap(),
+            Preference::Tally(t)
+        );
     }
 
     #[test]

@@ -6,6 +6,7 @@
 
 mod fig3;
 mod fig5;
+pub mod robustness;
 
 use std::path::Path;
 
