@@ -6,23 +6,17 @@
 //! the venv) or the venv lacks a package; a lock file beside it serialises installs between
 //! concurrent test processes. Also: env servers (`python -m dualrep.env`) as child processes.
 
-use std::fs::{self, File};
+use std::fs;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::OnceLock;
 use std::time::Duration;
 
+use super::py_venv::{Venv, pip_install, run, runs};
+
 fn package_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("clients/python")
-}
-
-fn venv_dir() -> PathBuf {
-    if let Some(dir) = std::env::var_os("DUALREP_CLIENT_VENV") {
-        return PathBuf::from(dir);
-    }
-    let home = std::env::var_os("HOME").expect("HOME is set (or set DUALREP_CLIENT_VENV)");
-    PathBuf::from(home).join(".cache/dualrep/venv-client")
 }
 
 /// FNV-1a over the package's source files (paths and contents), as hex.
@@ -60,75 +54,35 @@ fn source_digest() -> String {
     dualrep::session::digest(&bytes)
 }
 
-fn ready(python: &Path, stamp: &Path, digest: &str) -> bool {
-    python.exists()
-        && fs::read_to_string(stamp).is_ok_and(|s| s.trim() == digest)
-        && Command::new(python)
-            .args([
-                "-c",
-                "import dualrep, dualrep.env, gymnasium, pygame, pytest, mypy",
-            ])
-            .output()
-            .is_ok_and(|o| o.status.success())
-}
-
 /// The venv's interpreter, with the current `clients/python` and its test extras importable.
 pub fn python() -> &'static Path {
     static PYTHON: OnceLock<PathBuf> = OnceLock::new();
-    PYTHON.get_or_init(install)
-}
-
-fn install() -> PathBuf {
-    let venv = venv_dir();
-    let python = venv.join("bin/python");
-    let stamp = venv.join("dualrep-source.digest");
-    let digest = source_digest();
-    if ready(&python, &stamp, &digest) {
-        return python;
-    }
-    fs::create_dir_all(venv.parent().expect("the venv path has a parent")).unwrap();
-    let lock = File::create(venv.with_extension("lock")).unwrap();
-    lock.lock().unwrap();
-    if !ready(&python, &stamp, &digest) {
-        if !python.exists() {
-            run(Command::new("python3")
-                .args(["-m", "venv", "--clear"])
-                .arg(&venv));
-        }
-        eprintln!("installing clients/python[test] into {}", venv.display());
-        // From a copy: pip builds in the source tree, and the repository stays clean.
-        let copy = tempfile::tempdir().unwrap();
-        let src = copy.path().join("python");
-        run(Command::new("cp").arg("-r").arg(package_dir()).arg(&src));
-        run(Command::new(&python)
-            .args([
-                "-m",
-                "pip",
-                "install",
-                "--quiet",
-                "--disable-pip-version-check",
-            ])
-            .arg(format!("{}[test]", src.display())));
-        fs::write(&stamp, &digest).unwrap();
-        assert!(
-            ready(&python, &stamp, &digest),
-            "the package is not importable after installing it"
-        );
-    }
-    lock.unlock().unwrap();
-    python
-}
-
-fn run(command: &mut Command) {
-    let out = command
-        .output()
-        .unwrap_or_else(|e| panic!("running {command:?}: {e}"));
-    assert!(
-        out.status.success(),
-        "{command:?} failed (python3 -m venv needs Debian's python3-venv):\n{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
+    PYTHON.get_or_init(|| {
+        let venv = Venv {
+            var: "DUALREP_CLIENT_VENV",
+            name: "venv-client",
+        };
+        let stamp = venv.dir().join("dualrep-source.digest");
+        let digest = source_digest();
+        venv.ensure(
+            "clients/python[test]",
+            |python| {
+                fs::read_to_string(&stamp).is_ok_and(|s| s.trim() == digest)
+                    && runs(
+                        python,
+                        "import dualrep, dualrep.env, gymnasium, pygame, pytest, mypy",
+                    )
+            },
+            |python| {
+                // From a copy: pip builds in the source tree, and the repository stays clean.
+                let copy = tempfile::tempdir().unwrap();
+                let src = copy.path().join("python");
+                run(Command::new("cp").arg("-r").arg(package_dir()).arg(&src));
+                pip_install(python, &[&format!("{}[test]", src.display())]);
+                fs::write(&stamp, &digest).unwrap();
+            },
+        )
+    })
 }
 
 /// `python -m dualrep.env ...` on a port, killed when dropped.
