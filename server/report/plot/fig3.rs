@@ -6,7 +6,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{
-    DESC_PX, LEGEND_PX, Panel, TICK_PX, TITLE_PX, method_color, padded_range, short_number, text,
+    Axis, LEGEND_PX, Panel, TITLE_PX, draw_mesh, method_color, padded_range, short_number, text,
 };
 use crate::report::aggregate::{Fig3Method as Row, Fig3Task};
 use crate::report::methods::{Fig3Method, display_name, task_title};
@@ -59,20 +59,19 @@ fn draw_panel<DB: DrawingBackend>(
     let y_span = y_hi - y_lo;
     let x_fmt = |x: &f64| short_number(*x, x_max);
     let y_fmt = |y: &f64| short_number(*y, y_span);
-    chart
-        .configure_mesh()
-        .x_desc("Environment steps")
-        .y_desc("Cumulative reward")
-        .axis_desc_style(text(DESC_PX))
-        .label_style(text(TICK_PX))
-        .x_labels(6)
-        .y_labels(6)
-        .x_label_formatter(&x_fmt)
-        .y_label_formatter(&y_fmt)
-        // Major grid lines only: the minor ones crowd three small panels.
-        .light_line_style(TRANSPARENT)
-        .bold_line_style(BLACK.mix(0.12))
-        .draw()?;
+    draw_mesh(
+        &mut chart,
+        Axis {
+            desc: "Environment steps",
+            labels: 6,
+            format: &x_fmt,
+        },
+        Axis {
+            desc: "Cumulative reward",
+            labels: 6,
+            format: &y_fmt,
+        },
+    )?;
 
     // Bands first, so that no line is hidden under another method's band.
     for row in &task.methods {

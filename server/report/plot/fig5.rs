@@ -4,7 +4,7 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{DESC_PX, LEGEND_PX, Panel, TICK_PX, TITLE_PX, method_color, padded_range, text};
+use super::{Axis, LEGEND_PX, Panel, TITLE_PX, draw_mesh, method_color, padded_range, text};
 use crate::report::aggregate::Fig5Task;
 use crate::report::methods::{display_name, task_title};
 
@@ -62,20 +62,19 @@ fn draw_panel<DB: DrawingBackend>(
             format!("{y:.1}")
         }
     };
-    chart
-        .configure_mesh()
-        .x_desc("Number of queries")
-        .y_desc("Alignment")
-        .axis_desc_style(text(DESC_PX))
-        .label_style(text(TICK_PX))
-        .x_labels(8)
-        .y_labels(8)
-        .x_label_formatter(&x_fmt)
-        .y_label_formatter(&y_fmt)
-        // Major grid lines only: the minor ones crowd three small panels.
-        .light_line_style(TRANSPARENT)
-        .bold_line_style(BLACK.mix(0.12))
-        .draw()?;
+    draw_mesh(
+        &mut chart,
+        Axis {
+            desc: "Number of queries",
+            labels: 8,
+            format: &x_fmt,
+        },
+        Axis {
+            desc: "Alignment",
+            labels: 8,
+            format: &y_fmt,
+        },
+    )?;
 
     let k = task.methods.len() as f64;
     for (i, row) in task.methods.iter().enumerate() {

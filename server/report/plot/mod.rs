@@ -11,6 +11,7 @@ pub mod robustness;
 use std::path::Path;
 
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
@@ -103,6 +104,35 @@ pub fn write_figure<P: Panel>(panels: &[P], svg: &Path, png: &Path) -> anyhow::R
     draw_panels(&SVGBackend::new(svg, size).into_drawing_area(), panels)?;
     draw_panels(&BitMapBackend::new(png, size).into_drawing_area(), panels)?;
     Ok(())
+}
+
+/// One axis of a panel: its description, how many tick labels, and how they read.
+struct Axis<'a> {
+    desc: &'a str,
+    labels: usize,
+    format: &'a dyn Fn(&f64) -> String,
+}
+
+/// The mesh every panel draws: both axes described and labelled, and major grid lines only
+/// (the minor ones crowd small panels side by side).
+fn draw_mesh<DB: DrawingBackend>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    x: Axis<'_>,
+    y: Axis<'_>,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    chart
+        .configure_mesh()
+        .x_desc(x.desc)
+        .y_desc(y.desc)
+        .axis_desc_style(text(DESC_PX))
+        .label_style(text(TICK_PX))
+        .x_labels(x.labels)
+        .y_labels(y.labels)
+        .x_label_formatter(x.format)
+        .y_label_formatter(y.format)
+        .light_line_style(TRANSPARENT)
+        .bold_line_style(BLACK.mix(0.12))
+        .draw()
 }
 
 /// Axis range that holds `values` with 5 % headroom, always including 0 (a cumulative reward or

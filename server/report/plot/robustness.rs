@@ -7,8 +7,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{
-    DESC_PX, LEGEND_PX, Panel, TAB10, TICK_PX, TITLE_PX, method_color, padded_range, short_number,
-    text,
+    Axis, LEGEND_PX, Panel, TAB10, TICK_PX, TITLE_PX, draw_mesh, method_color, padded_range,
+    short_number, text,
 };
 use crate::report::methods::{display_name, order_key, task_rank, task_title};
 use crate::report::robustness::RobustnessTask;
@@ -80,19 +80,19 @@ fn draw_errors<DB: DrawingBackend>(
     let y_span = y_hi - y_lo;
     let x_fmt = |x: &f64| format!("{x:.0} %");
     let y_fmt = |y: &f64| short_number(*y, y_span);
-    chart
-        .configure_mesh()
-        .x_desc("Teacher's error rate")
-        .y_desc("Cumulative reward")
-        .axis_desc_style(text(DESC_PX))
-        .label_style(text(TICK_PX))
-        .x_labels(5)
-        .y_labels(6)
-        .x_label_formatter(&x_fmt)
-        .y_label_formatter(&y_fmt)
-        .light_line_style(TRANSPARENT)
-        .bold_line_style(BLACK.mix(0.12))
-        .draw()?;
+    draw_mesh(
+        &mut chart,
+        Axis {
+            desc: "Teacher's error rate",
+            labels: 5,
+            format: &x_fmt,
+        },
+        Axis {
+            desc: "Cumulative reward",
+            labels: 6,
+            format: &y_fmt,
+        },
+    )?;
     let mut methods: Vec<&str> = task.errors.iter().map(|c| c.method.as_str()).collect();
     methods.sort_by_key(|m| order_key(m));
     methods.dedup();
@@ -202,19 +202,19 @@ fn draw_betas<DB: DrawingBackend>(
             format!("{y:.1}")
         }
     };
-    chart
-        .configure_mesh()
-        .x_desc("Teacher's rationality (teacher_beta)")
-        .y_desc("Final alignment")
-        .axis_desc_style(text(DESC_PX))
-        .label_style(text(TICK_PX))
-        .x_labels(betas.len().max(2))
-        .y_labels(8)
-        .x_label_formatter(&x_fmt)
-        .y_label_formatter(&y_fmt)
-        .light_line_style(TRANSPARENT)
-        .bold_line_style(BLACK.mix(0.12))
-        .draw()?;
+    draw_mesh(
+        &mut chart,
+        Axis {
+            desc: "Teacher's rationality (teacher_beta)",
+            labels: betas.len().max(2),
+            format: &x_fmt,
+        },
+        Axis {
+            desc: "Final alignment",
+            labels: 8,
+            format: &y_fmt,
+        },
+    )?;
     let mut tasks: Vec<&RobustnessTask> = tasks.iter().collect();
     tasks.sort_by_key(|t| task_rank(t.task));
     for (i, t) in tasks.iter().enumerate() {
