@@ -148,17 +148,13 @@ pub(crate) unsafe fn product<
                     },
                     other => other,
                 };
-                // The last row tile of a block may be short: as few vectors as its rows need
-                // (a 300-row layer is six 48-row tiles and one of 12 rows on AVX-512).
-                let two = MV > 2 && height > I::LANES && height <= 2 * I::LANES;
+                // Chains of fewer than 16 steps (a first layer's forward, `k` = 10) step by step:
+                // the leftover steps of an unrolled loop would cost more than the loop saves.
                 unsafe {
-                    match (p.b_cols, height <= I::LANES) {
-                        (true, _) if two => tile::<I, 2, NR, true, true, UNROLL>(&args, epilogue),
-                        (false, _) if two => tile::<I, 2, NR, false, true, UNROLL>(&args, epilogue),
-                        (true, false) => tile::<I, MV, NR, true, true, UNROLL>(&args, epilogue),
-                        (false, false) => tile::<I, MV, NR, false, true, UNROLL>(&args, epilogue),
-                        (true, true) => tile::<I, 1, NR, true, true, UNROLL>(&args, epilogue),
-                        (false, true) => tile::<I, 1, NR, false, true, UNROLL>(&args, epilogue),
+                    if p.k >= 16 {
+                        packed_tile::<I, MV, NR, UNROLL>(p.b_cols, &args, epilogue)
+                    } else {
+                        packed_tile::<I, MV, NR, 1>(p.b_cols, &args, epilogue)
                     }
                 }
                 i += mr;
@@ -166,6 +162,29 @@ pub(crate) unsafe fn product<
             j += NR;
         }
         i_block = i_end;
+    }
+}
+
+/// One tile of a packed row tile of `A`, `U` steps of `k` per turn. The last row tile may be
+/// short: as few vectors as its rows need (a 300-row layer is six 48-row tiles and one of 12
+/// rows on AVX-512).
+#[inline(always)]
+unsafe fn packed_tile<I: Isa, const MV: usize, const NR: usize, const U: usize>(
+    b_cols: bool,
+    args: &TileArgs,
+    epilogue: Epilogue,
+) {
+    let height = args.rows;
+    let two = MV > 2 && height > I::LANES && height <= 2 * I::LANES;
+    unsafe {
+        match (b_cols, height <= I::LANES) {
+            (true, _) if two => tile::<I, 2, NR, true, true, U>(args, epilogue),
+            (false, _) if two => tile::<I, 2, NR, false, true, U>(args, epilogue),
+            (true, false) => tile::<I, MV, NR, true, true, U>(args, epilogue),
+            (false, false) => tile::<I, MV, NR, false, true, U>(args, epilogue),
+            (true, true) => tile::<I, 1, NR, true, true, U>(args, epilogue),
+            (false, true) => tile::<I, 1, NR, false, true, U>(args, epilogue),
+        }
     }
 }
 

@@ -76,13 +76,7 @@ pub(crate) unsafe fn tile<
     for (v, n) in valid.iter_mut().enumerate() {
         *n = t.rows.saturating_sub(v * lanes).min(lanes);
     }
-    // Short chains (a first layer's few inputs) step by step: the unrolled loop's leftover
-    // steps would cost more than the loop saves.
-    let acc = if UNROLL > 1 && t.k >= 4 * UNROLL {
-        unsafe { chains::<I, MV, NR, B_COLS, PADDED, UNROLL>(t, acc, &b_col, &valid) }
-    } else {
-        unsafe { chains::<I, MV, NR, B_COLS, PADDED, 1>(t, acc, &b_col, &valid) }
-    };
+    let acc = unsafe { chains::<I, MV, NR, B_COLS, PADDED, UNROLL>(t, acc, &b_col, &valid) };
     if t.c_is != 1 {
         // By value: a reference would let the accumulators escape, and the compiler would then
         // store every one of them at every step of `k`.
