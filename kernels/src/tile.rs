@@ -46,7 +46,8 @@ pub(crate) enum Epilogue {
 }
 
 /// Compute and store one tile. `PADDED`: `A` has all `MV * LANES` rows readable (a packed
-/// tile); else rows past `rows` are not read (`A` in place, its last tile).
+/// tile); else rows past `rows` are not read (`A` in place, its last tile). `UNROLL`: steps of
+/// `k` per turn of the loop.
 ///
 /// # Safety
 /// The operands must be valid for the rows, columns and `k` given, `C` writable and aliasing
@@ -58,12 +59,13 @@ pub(crate) unsafe fn tile<
     const NR: usize,
     const B_COLS: bool,
     const PADDED: bool,
+    const UNROLL: usize,
 >(
     t: &TileArgs,
     epilogue: Epilogue,
 ) {
     let lanes = I::LANES;
-    let mut acc = [[unsafe { I::zero() }; MV]; NR];
+    let acc = [[unsafe { I::zero() }; MV]; NR];
     // Column j's first element; columns past the valid ones read the last valid column.
     let mut b_col = [t.b; NR];
     for (j, p) in b_col.iter_mut().enumerate() {
@@ -74,34 +76,7 @@ pub(crate) unsafe fn tile<
     for (v, n) in valid.iter_mut().enumerate() {
         *n = t.rows.saturating_sub(v * lanes).min(lanes);
     }
-    for kk in 0..t.k {
-        let a = unsafe { t.a.add(kk * t.a_ks) };
-        let mut av = [unsafe { I::zero() }; MV];
-        for v in 0..MV {
-            av[v] = unsafe {
-                if PADDED || valid[v] == lanes {
-                    I::load(a.add(v * lanes))
-                } else if valid[v] > 0 {
-                    I::load_first(a.add(v * lanes), valid[v])
-                } else {
-                    I::zero()
-                }
-            };
-        }
-        for j in 0..NR {
-            let x = unsafe {
-                if B_COLS {
-                    *b_col[j].add(kk)
-                } else {
-                    *t.b.add(kk * t.b_ks + j.min(t.cols - 1))
-                }
-            };
-            let bj = unsafe { I::splat(x) };
-            for v in 0..MV {
-                acc[j][v] = unsafe { I::fma(av[v], bj, acc[j][v]) };
-            }
-        }
-    }
+    let acc = unsafe { chains::<I, MV, NR, B_COLS, PADDED, UNROLL>(t, acc, &b_col, &valid) };
     if t.c_is != 1 {
         // By value: a reference would let the accumulators escape, and the compiler would then
         // store every one of them at every step of `k`.
@@ -150,6 +125,78 @@ pub(crate) unsafe fn tile<
             }
         }
     }
+}
+
+/// All `k` steps of a tile's chains, `U` steps per turn of the loop (fewer branches and
+/// pointer updates between the multiply-adds). The steps that do not fill a turn come first,
+/// so that there is one loop, in which the compiler keeps every accumulator in a register.
+#[inline(always)]
+unsafe fn chains<
+    I: Isa,
+    const MV: usize,
+    const NR: usize,
+    const B_COLS: bool,
+    const PADDED: bool,
+    const U: usize,
+>(
+    t: &TileArgs,
+    mut acc: [[I::V; MV]; NR],
+    b_col: &[*const f32; NR],
+    valid: &[usize; MV],
+) -> [[I::V; MV]; NR] {
+    let head = t.k % U;
+    for u in 0..U - 1 {
+        if u < head {
+            acc = unsafe { step::<I, MV, NR, B_COLS, PADDED>(t, acc, b_col, valid, u) };
+        }
+    }
+    let mut kk = head;
+    while kk < t.k {
+        for u in 0..U {
+            acc = unsafe { step::<I, MV, NR, B_COLS, PADDED>(t, acc, b_col, valid, kk + u) };
+        }
+        kk += U;
+    }
+    acc
+}
+
+/// Step `kk` of a tile's chains: one row of `A`'s tile times one row of `B`'s.
+#[inline(always)]
+unsafe fn step<I: Isa, const MV: usize, const NR: usize, const B_COLS: bool, const PADDED: bool>(
+    t: &TileArgs,
+    mut acc: [[I::V; MV]; NR],
+    b_col: &[*const f32; NR],
+    valid: &[usize; MV],
+    kk: usize,
+) -> [[I::V; MV]; NR] {
+    let lanes = I::LANES;
+    let a = unsafe { t.a.add(kk * t.a_ks) };
+    let mut av = [unsafe { I::zero() }; MV];
+    for v in 0..MV {
+        av[v] = unsafe {
+            if PADDED || valid[v] == lanes {
+                I::load(a.add(v * lanes))
+            } else if valid[v] > 0 {
+                I::load_first(a.add(v * lanes), valid[v])
+            } else {
+                I::zero()
+            }
+        };
+    }
+    for j in 0..NR {
+        let x = unsafe {
+            if B_COLS {
+                *b_col[j].add(kk)
+            } else {
+                *t.b.add(kk * t.b_ks + j.min(t.cols - 1))
+            }
+        };
+        let bj = unsafe { I::splat(x) };
+        for v in 0..MV {
+            acc[j][v] = unsafe { I::fma(av[v], bj, acc[j][v]) };
+        }
+    }
+    acc
 }
 
 /// The epilogue for a `C` whose rows are not contiguous, element by element through the stack

@@ -69,7 +69,7 @@ fn layer_outputs(
 
 /// `(n_in, n_out, batch)`. The last three are large enough to be shared out over threads on
 /// the dot-product and narrow paths.
-const SHAPES: [(usize, usize, usize); 17] = [
+const SHAPES: [(usize, usize, usize); 18] = [
     // A full row tile and a short one of two vectors (70 = 48 + 22 rows on AVX-512).
     (24, 70, 20),
     (10, 400, 64),
@@ -81,6 +81,8 @@ const SHAPES: [(usize, usize, usize); 17] = [
     (300, 4, 3),
     (3, 5, 5),
     (17, 33, 13),
+    // k of 19, 35 and 23: three steps before the first whole turn of an unrolled tile's loop.
+    (19, 35, 23),
     (64, 64, 32),
     (1, 1, 1),
     (40, 17, 100),
