@@ -138,16 +138,7 @@ pub(crate) unsafe fn product<
                     c_js: p.c_js,
                     c_is: p.c_is,
                 };
-                let epilogue = match p.epilogue {
-                    Epilogue::Bias { bias, relu } if !bias.is_null() => Epilogue::Bias {
-                        bias: unsafe { bias.add(i) },
-                        relu,
-                    },
-                    Epilogue::Mask { h } => Epilogue::Mask {
-                        h: unsafe { h.add(i + j * p.c_js) },
-                    },
-                    other => other,
-                };
+                let epilogue = unsafe { p.epilogue.at(i, i + j * p.c_js) };
                 // Chains of fewer than 16 steps (a first layer's forward, `k` = 10) step by step:
                 // the leftover steps of an unrolled loop would cost more than the loop saves.
                 unsafe {
@@ -212,16 +203,7 @@ unsafe fn in_place<I: Isa, const MV: usize, const NR: usize>(part: &Part<'_>, p:
             c_js: p.c_js,
             c_is: p.c_is,
         };
-        let epilogue = match p.epilogue {
-            Epilogue::Bias { bias, relu } if !bias.is_null() => Epilogue::Bias {
-                bias: unsafe { bias.add(i) },
-                relu,
-            },
-            Epilogue::Mask { h } => Epilogue::Mask {
-                h: unsafe { h.add(i) },
-            },
-            other => other,
-        };
+        let epilogue = unsafe { p.epilogue.at(i, i) };
         unsafe {
             match (p.b_cols, height == mr) {
                 (true, true) => tile::<I, MV, NR, true, true, 1>(&args, epilogue),

@@ -45,6 +45,28 @@ pub(crate) enum Epilogue {
     Store,
 }
 
+impl Epilogue {
+    /// This epilogue for a tile whose first row is `row` and first element of `C` is `element`
+    /// floats into `C`: the bias moves with the row, the mask (laid out like `C`) with the
+    /// element.
+    ///
+    /// # Safety
+    /// The offsets stay inside the bias and the mask.
+    #[inline(always)]
+    pub(crate) unsafe fn at(self, row: usize, element: usize) -> Self {
+        match self {
+            Epilogue::Bias { bias, relu } if !bias.is_null() => Epilogue::Bias {
+                bias: unsafe { bias.add(row) },
+                relu,
+            },
+            Epilogue::Mask { h } => Epilogue::Mask {
+                h: unsafe { h.add(element) },
+            },
+            other => other,
+        }
+    }
+}
+
 /// Compute and store one tile. `PADDED`: `A` has all `MV * LANES` rows readable (a packed
 /// tile); else rows past `rows` are not read (`A` in place, its last tile). `UNROLL`: steps of
 /// `k` per turn of the loop.
