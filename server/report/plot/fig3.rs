@@ -6,7 +6,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{
-    Axis, LEGEND_PX, Panel, TITLE_PX, draw_mesh, method_color, padded_range, short_number, text,
+    Axis, Panel, TITLE_PX, draw_labelled_line, draw_legend, draw_mesh, method_color, padded_range,
+    short_number, text,
 };
 use crate::report::aggregate::{Fig3Method as Row, Fig3Task};
 use crate::report::methods::{Fig3Method, display_name, task_title};
@@ -93,19 +94,8 @@ fn draw_panel<DB: DrawingBackend>(
             .iter()
             .copied()
             .zip(row.curve.mean.iter().copied());
-        chart
-            .draw_series(LineSeries::new(points, color.stroke_width(2)))?
-            .label(legend_label(row))
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(3))
-            });
+        draw_labelled_line(&mut chart, points, color, legend_label(row))?;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .label_font(text(LEGEND_PX))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK.mix(0.3))
-        .draw()?;
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
     Ok(())
 }

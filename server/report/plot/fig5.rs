@@ -4,7 +4,10 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{Axis, LEGEND_PX, Panel, TITLE_PX, draw_mesh, method_color, padded_range, text};
+use super::{
+    Axis, Panel, TITLE_PX, draw_labelled_line, draw_legend, draw_mesh, method_color, padded_range,
+    text,
+};
 use crate::report::aggregate::Fig5Task;
 use crate::report::methods::{display_name, task_title};
 
@@ -85,21 +88,10 @@ fn draw_panel<DB: DrawingBackend>(
         chart.draw_series(c.x.iter().zip(c.mean.iter().zip(&c.se)).map(|(x, (m, s))| {
             ErrorBar::new_vertical(x + shift, m - s, *m, m + s, color.stroke_width(1), 5)
         }))?;
-        chart
-            .draw_series(LineSeries::new(points(), color.stroke_width(2)))?
-            .label(display_name(&row.method))
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(3))
-            });
+        draw_labelled_line(&mut chart, points(), color, display_name(&row.method))?;
         chart.draw_series(points().map(|p| Circle::new(p, 2, color.filled())))?;
     }
-    chart
-        .configure_series_labels()
-        // Alignment starts low and rises: the upper left is the corner curves reach last.
-        .position(SeriesLabelPosition::UpperLeft)
-        .label_font(text(LEGEND_PX))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK.mix(0.3))
-        .draw()?;
+    // Alignment starts low and rises: the upper left is the corner curves reach last.
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
     Ok(())
 }

@@ -135,6 +135,34 @@ fn draw_mesh<DB: DrawingBackend>(
         .draw()
 }
 
+/// One curve drawn as a line, named in the legend by a short stroke of its colour.
+fn draw_labelled_line<'a, DB: DrawingBackend + 'a>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    points: impl IntoIterator<Item = (f64, f64)>,
+    color: RGBColor,
+    label: impl Into<String>,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    chart
+        .draw_series(LineSeries::new(points, color.stroke_width(2)))?
+        .label(label)
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(3)));
+    Ok(())
+}
+
+/// The legend of every panel: the same font, a translucent box, placed where curves are not.
+fn draw_legend<'a, DB: DrawingBackend + 'a>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    position: SeriesLabelPosition,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .label_font(text(LEGEND_PX))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK.mix(0.3))
+        .draw()
+}
+
 /// Axis range that holds `values` with 5 % headroom, always including 0 (a cumulative reward or
 /// an alignment is read against zero) and never empty.
 fn padded_range(values: impl Iterator<Item = f64>) -> (f64, f64) {

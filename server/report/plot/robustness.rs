@@ -7,8 +7,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{
-    Axis, LEGEND_PX, Panel, TAB10, TICK_PX, TITLE_PX, draw_mesh, method_color, padded_range,
-    short_number, text,
+    Axis, Panel, TAB10, TICK_PX, TITLE_PX, draw_labelled_line, draw_legend, draw_mesh,
+    method_color, padded_range, short_number, text,
 };
 use crate::report::methods::{display_name, order_key, task_rank, task_title};
 use crate::report::robustness::RobustnessTask;
@@ -133,20 +133,9 @@ fn draw_errors<DB: DrawingBackend>(
         } else {
             display_name(method)
         };
-        chart
-            .draw_series(LineSeries::new(points, color.stroke_width(2)))?
-            .label(label)
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(3))
-            });
+        draw_labelled_line(&mut chart, points, color, label)?;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::LowerLeft)
-        .label_font(text(LEGEND_PX))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK.mix(0.3))
-        .draw()?;
+    draw_legend(&mut chart, SeriesLabelPosition::LowerLeft)?;
     Ok(())
 }
 
@@ -246,20 +235,9 @@ fn draw_betas<DB: DrawingBackend>(
             } else {
                 task_title(t.task).to_string()
             };
-            chart
-                .draw_series(LineSeries::new(points, color.stroke_width(2)))?
-                .label(label)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(3))
-                });
+            draw_labelled_line(&mut chart, points, color, label)?;
         }
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .label_font(text(LEGEND_PX))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK.mix(0.3))
-        .draw()?;
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
     Ok(())
 }
