@@ -10,156 +10,160 @@ const N_IN: usize = 400;
 const N_OUT: usize = 300;
 const BATCH: usize = 512;
 const COPIES: usize = 8;
+const DIMS: (usize, usize, usize) = (N_IN, N_OUT, BATCH);
 
-/// `z = W x` (column-major `n_out x batch`; `w` row-major `n_out x n_in`, `x` column-major).
-fn gemm_crate_forward(w: &[f32], x: &[f32], z: &mut [f32]) {
-    // SAFETY: the strides describe the slices' own layouts and lengths (checked by callers'
-    // sizes: N_OUT * N_IN, N_IN * BATCH, N_OUT * BATCH).
-    unsafe {
-        gemm::gemm(
-            N_OUT,
-            BATCH,
-            N_IN,
-            z.as_mut_ptr(),
-            N_OUT as isize,
-            1,
-            false,
-            w.as_ptr(),
-            1,
-            N_IN as isize,
-            x.as_ptr(),
-            N_IN as isize,
-            1,
-            0.0,
-            1.0,
-            false,
-            false,
-            false,
-            gemm::Parallelism::None,
-        )
+/// One product `dst (+)= lhs rhs` (`m x k` by `k x n`), each operand given by its row and
+/// column strides; `accumulate` keeps the old `dst` (a weight gradient), otherwise it is
+/// overwritten.
+struct Product {
+    name: &'static str,
+    m: usize,
+    n: usize,
+    k: usize,
+    dst: (isize, isize),
+    lhs: (isize, isize),
+    rhs: (isize, isize),
+    accumulate: bool,
+}
+
+/// Activations are column-major `n x batch`, weights row-major `n_out x n_in` (our layout).
+const PRODUCTS: [Product; 3] = [
+    // z = W x
+    Product {
+        name: "forward",
+        m: N_OUT,
+        n: BATCH,
+        k: N_IN,
+        dst: (1, N_OUT as isize),
+        lhs: (N_IN as isize, 1),
+        rhs: (1, N_IN as isize),
+        accumulate: false,
+    },
+    // dW += dz x^T
+    Product {
+        name: "weight gradient",
+        m: N_OUT,
+        n: N_IN,
+        k: BATCH,
+        dst: (N_IN as isize, 1),
+        lhs: (1, N_OUT as isize),
+        rhs: (N_IN as isize, 1),
+        accumulate: true,
+    },
+    // dx = W^T dz
+    Product {
+        name: "input gradient",
+        m: N_IN,
+        n: BATCH,
+        k: N_OUT,
+        dst: (1, N_IN as isize),
+        lhs: (1, N_IN as isize),
+        rhs: (1, N_OUT as isize),
+        accumulate: false,
+    },
+];
+
+impl Product {
+    fn lens(&self) -> (usize, usize, usize) {
+        (self.m * self.k, self.k * self.n, self.m * self.n)
+    }
+
+    fn with_gemm_crate(&self, lhs: &[f32], rhs: &[f32], dst: &mut [f32]) {
+        assert_eq!((lhs.len(), rhs.len(), dst.len()), self.lens());
+        // SAFETY: the strides describe dense layouts of exactly these lengths (asserted).
+        unsafe {
+            gemm::gemm(
+                self.m,
+                self.n,
+                self.k,
+                dst.as_mut_ptr(),
+                self.dst.1,
+                self.dst.0,
+                self.accumulate,
+                lhs.as_ptr(),
+                self.lhs.1,
+                self.lhs.0,
+                rhs.as_ptr(),
+                self.rhs.1,
+                self.rhs.0,
+                if self.accumulate { 1.0 } else { 0.0 },
+                1.0,
+                false,
+                false,
+                false,
+                gemm::Parallelism::None,
+            )
+        }
+    }
+
+    fn with_matrixmultiply(&self, lhs: &[f32], rhs: &[f32], dst: &mut [f32]) {
+        assert_eq!((lhs.len(), rhs.len(), dst.len()), self.lens());
+        // SAFETY: as above.
+        unsafe {
+            matrixmultiply::sgemm(
+                self.m,
+                self.k,
+                self.n,
+                1.0,
+                lhs.as_ptr(),
+                self.lhs.0,
+                self.lhs.1,
+                rhs.as_ptr(),
+                self.rhs.0,
+                self.rhs.1,
+                if self.accumulate { 1.0 } else { 0.0 },
+                dst.as_mut_ptr(),
+                self.dst.0,
+                self.dst.1,
+            )
+        }
+    }
+
+    /// Ours, with its epilogue when `epilogue` (bias and ReLU, bias gradient, ReLU mask by the
+    /// layer's input), as the update calls it. `lhs` and `rhs` are the operands as above.
+    fn with_ours(&self, lhs: &[f32], rhs: &[f32], dst: &mut [f32], epilogue: bool) {
+        match self.name {
+            "forward" => {
+                let bias = if epilogue { BIAS } else { [0.0; N_OUT] };
+                forward(Isa::Avx512, 1, DIMS, lhs, &bias, rhs, dst, epilogue)
+            }
+            "weight gradient" => {
+                let mut db = [0.0; N_OUT];
+                weight_grad(Isa::Avx512, 1, DIMS, rhs, lhs, dst, &mut db)
+            }
+            _ => input_grad(
+                Isa::Avx512,
+                1,
+                DIMS,
+                lhs,
+                rhs,
+                dst,
+                epilogue.then_some(&MASK[..]),
+            ),
+        }
     }
 }
 
-/// `dW += dz x^T` (`dw` row-major `n_out x n_in`).
-fn gemm_crate_weight_grad(x: &[f32], dz: &[f32], dw: &mut [f32]) {
-    // SAFETY: as above.
-    unsafe {
-        gemm::gemm(
-            N_OUT,
-            N_IN,
-            BATCH,
-            dw.as_mut_ptr(),
-            1,
-            N_IN as isize,
-            true,
-            dz.as_ptr(),
-            N_OUT as isize,
-            1,
-            x.as_ptr(),
-            1,
-            N_IN as isize,
-            1.0,
-            1.0,
-            false,
-            false,
-            false,
-            gemm::Parallelism::None,
-        )
+/// The forward's bias and the input gradient's ReLU output (half of it positive).
+static BIAS: [f32; N_OUT] = [0.01; N_OUT];
+static MASK: [f32; N_IN * BATCH] = {
+    let mut m = [0.0; N_IN * BATCH];
+    let mut i = 0;
+    while i < m.len() {
+        m[i] = if i % 2 == 0 { 1.0 } else { -1.0 };
+        i += 1;
     }
-}
+    m
+};
 
-/// `dx = W^T dz` (column-major `n_in x batch`).
-fn gemm_crate_input_grad(w: &[f32], dz: &[f32], dx: &mut [f32]) {
-    // SAFETY: as above.
-    unsafe {
-        gemm::gemm(
-            N_IN,
-            BATCH,
-            N_OUT,
-            dx.as_mut_ptr(),
-            N_IN as isize,
-            1,
-            false,
-            w.as_ptr(),
-            N_IN as isize,
-            1,
-            dz.as_ptr(),
-            N_OUT as isize,
-            1,
-            0.0,
-            1.0,
-            false,
-            false,
-            false,
-            gemm::Parallelism::None,
-        )
-    }
-}
-
-fn mm_forward(w: &[f32], x: &[f32], z: &mut [f32]) {
-    // SAFETY: as above.
-    unsafe {
-        matrixmultiply::sgemm(
-            N_OUT,
-            N_IN,
-            BATCH,
-            1.0,
-            w.as_ptr(),
-            N_IN as isize,
-            1,
-            x.as_ptr(),
-            1,
-            N_IN as isize,
-            0.0,
-            z.as_mut_ptr(),
-            1,
-            N_OUT as isize,
-        )
-    }
-}
-
-fn mm_weight_grad(x: &[f32], dz: &[f32], dw: &mut [f32]) {
-    // SAFETY: as above.
-    unsafe {
-        matrixmultiply::sgemm(
-            N_OUT,
-            BATCH,
-            N_IN,
-            1.0,
-            dz.as_ptr(),
-            1,
-            N_OUT as isize,
-            x.as_ptr(),
-            N_IN as isize,
-            1,
-            1.0,
-            dw.as_mut_ptr(),
-            N_IN as isize,
-            1,
-        )
-    }
-}
-
-fn mm_input_grad(w: &[f32], dz: &[f32], dx: &mut [f32]) {
-    // SAFETY: as above.
-    unsafe {
-        matrixmultiply::sgemm(
-            N_IN,
-            N_OUT,
-            BATCH,
-            1.0,
-            w.as_ptr(),
-            1,
-            N_IN as isize,
-            dz.as_ptr(),
-            1,
-            N_OUT as isize,
-            0.0,
-            dx.as_mut_ptr(),
-            1,
-            N_IN as isize,
-        )
-    }
+fn fill(len: usize, seed: usize) -> Vec<Vec<f32>> {
+    (0..COPIES)
+        .map(|c| {
+            (0..len)
+                .map(|i| (((i * 7 + seed * 13 + c) % 97) as f32 - 48.0) / 97.0)
+                .collect()
+        })
+        .collect()
 }
 
 fn max_abs_diff(a: &[f32], b: &[f32]) -> f32 {
@@ -178,84 +182,33 @@ fn main() {
         .nth(2)
         .and_then(|s| s.parse().ok())
         .unwrap_or(2);
-    let fill = |len: usize, seed: usize| -> Vec<Vec<f32>> {
-        (0..COPIES)
-            .map(|c| {
-                (0..len)
-                    .map(|i| (((i * 7 + seed * 13 + c) % 97) as f32 - 48.0) / 97.0)
-                    .collect()
-            })
-            .collect()
-    };
-    let w = fill(N_IN * N_OUT, 1);
-    let x = fill(N_IN * BATCH, 3);
-    let dz = fill(N_OUT * BATCH, 5);
-    let zero_bias = vec![0.0; N_OUT];
-    let dims = (N_IN, N_OUT, BATCH);
+    let operands: Vec<_> = PRODUCTS
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let (l, r, d) = p.lens();
+            (fill(l, 3 * i + 1), fill(r, 3 * i + 2), fill(d, 3 * i + 3))
+        })
+        .collect();
 
-    // The three libraries compute the same products (no bias, no ReLU, gradients from zero).
-    let (mut ours, mut theirs, mut mm) = (
-        vec![0.0; N_OUT * BATCH],
-        vec![0.0; N_OUT * BATCH],
-        vec![0.0; N_OUT * BATCH],
-    );
-    forward(
-        Isa::Avx512,
-        1,
-        dims,
-        &w[0],
-        &zero_bias,
-        &x[0],
-        &mut ours,
-        false,
-    );
-    gemm_crate_forward(&w[0], &x[0], &mut theirs);
-    mm_forward(&w[0], &x[0], &mut mm);
-    println!(
-        "forward: max |ours - gemm| {:.1e}, |ours - matrixmultiply| {:.1e}",
-        max_abs_diff(&ours, &theirs),
-        max_abs_diff(&ours, &mm)
-    );
-    let (mut ours, mut theirs, mut mm) = (
-        vec![0.0; N_IN * N_OUT],
-        vec![0.0; N_IN * N_OUT],
-        vec![0.0; N_IN * N_OUT],
-    );
-    weight_grad(
-        Isa::Avx512,
-        1,
-        dims,
-        &x[0],
-        &dz[0],
-        &mut ours,
-        &mut vec![0.0; N_OUT],
-    );
-    gemm_crate_weight_grad(&x[0], &dz[0], &mut theirs);
-    mm_weight_grad(&x[0], &dz[0], &mut mm);
-    println!(
-        "weight gradient: max |ours - gemm| {:.1e}, |ours - matrixmultiply| {:.1e}",
-        max_abs_diff(&ours, &theirs),
-        max_abs_diff(&ours, &mm)
-    );
-    let (mut ours, mut theirs, mut mm) = (
-        vec![0.0; N_IN * BATCH],
-        vec![0.0; N_IN * BATCH],
-        vec![0.0; N_IN * BATCH],
-    );
-    input_grad(Isa::Avx512, 1, dims, &w[0], &dz[0], &mut ours, None);
-    gemm_crate_input_grad(&w[0], &dz[0], &mut theirs);
-    mm_input_grad(&w[0], &dz[0], &mut mm);
-    println!(
-        "input gradient: max |ours - gemm| {:.1e}, |ours - matrixmultiply| {:.1e}",
-        max_abs_diff(&ours, &theirs),
-        max_abs_diff(&ours, &mm)
-    );
+    // The three libraries compute the same products (no epilogue, gradients from zero).
+    for (p, (lhs, rhs, _)) in PRODUCTS.iter().zip(&operands) {
+        let out = |f: &dyn Fn(&mut [f32])| {
+            let mut dst = vec![0.0; p.lens().2];
+            f(&mut dst);
+            dst
+        };
+        let ours = out(&|d| p.with_ours(&lhs[0], &rhs[0], d, false));
+        let theirs = out(&|d| p.with_gemm_crate(&lhs[0], &rhs[0], d));
+        let mm = out(&|d| p.with_matrixmultiply(&lhs[0], &rhs[0], d));
+        println!(
+            "{}: max |ours - gemm| {:.1e}, |ours - matrixmultiply| {:.1e}",
+            p.name,
+            max_abs_diff(&ours, &theirs),
+            max_abs_diff(&ours, &mm)
+        );
+    }
 
-    let b = fill(N_OUT, 2);
-    let mut z = fill(N_OUT * BATCH, 4);
-    let mut dw = fill(N_IN * N_OUT, 6);
-    let mut db = fill(N_OUT, 7);
-    let mut dx = fill(N_IN * BATCH, 8);
     let flop = 2.0 * (N_IN * N_OUT * BATCH) as f64;
     let time = |f: &mut dyn FnMut(usize)| {
         // The median of single calls: robust to the other processes of a shared machine.
@@ -269,52 +222,30 @@ fn main() {
         times.sort_by(f64::total_cmp);
         times[times.len() / 2]
     };
+    let mut operands = operands;
     for round in 0..rounds {
         let peak = fma_peak::fma_peak_gflops(Isa::Avx512, 1, Duration::from_millis(200));
         println!("round {round}: one-thread AVX-512 FMA peak {peak:.0} GFLOP/s");
-        let report = |name: &str, t: f64| {
-            let g = flop / t / 1e9;
-            println!(
-                "  {name:<40} {:6.0} us {g:5.0} GFLOP/s {:.2} of peak",
-                t * 1e6,
-                g / peak
-            );
-        };
-        report(
-            "ours forward (+ bias, ReLU)",
-            time(&mut |c| forward(Isa::Avx512, 1, dims, &w[c], &b[c], &x[c], &mut z[c], true)),
-        );
-        report(
-            "gemm crate forward (product only)",
-            time(&mut |c| gemm_crate_forward(&w[c], &x[c], &mut z[c])),
-        );
-        report(
-            "matrixmultiply forward (product only)",
-            time(&mut |c| mm_forward(&w[c], &x[c], &mut z[c])),
-        );
-        report(
-            "ours weight gradient (+ bias gradient)",
-            time(&mut |c| weight_grad(Isa::Avx512, 1, dims, &x[c], &dz[c], &mut dw[c], &mut db[c])),
-        );
-        report(
-            "gemm crate weight gradient",
-            time(&mut |c| gemm_crate_weight_grad(&x[c], &dz[c], &mut dw[c])),
-        );
-        report(
-            "matrixmultiply weight gradient",
-            time(&mut |c| mm_weight_grad(&x[c], &dz[c], &mut dw[c])),
-        );
-        report(
-            "ours input gradient (+ ReLU mask)",
-            time(&mut |c| input_grad(Isa::Avx512, 1, dims, &w[c], &dz[c], &mut dx[c], Some(&x[c]))),
-        );
-        report(
-            "gemm crate input gradient (product only)",
-            time(&mut |c| gemm_crate_input_grad(&w[c], &dz[c], &mut dx[c])),
-        );
-        report(
-            "matrixmultiply input gradient",
-            time(&mut |c| mm_input_grad(&w[c], &dz[c], &mut dx[c])),
-        );
+        for (p, (lhs, rhs, dst)) in PRODUCTS.iter().zip(&mut operands) {
+            let report = |who: &str, f: &mut dyn FnMut(usize)| {
+                let t = time(f);
+                let g = flop / t / 1e9;
+                let name = format!("{who} {}", p.name);
+                println!(
+                    "  {name:<34} {:6.0} us {g:5.0} GFLOP/s {:.2} of peak",
+                    t * 1e6,
+                    g / peak
+                );
+            };
+            report("ours (+ epilogue)", &mut |c| {
+                p.with_ours(&lhs[c], &rhs[c], &mut dst[c], true)
+            });
+            report("gemm crate", &mut |c| {
+                p.with_gemm_crate(&lhs[c], &rhs[c], &mut dst[c])
+            });
+            report("matrixmultiply", &mut |c| {
+                p.with_matrixmultiply(&lhs[c], &rhs[c], &mut dst[c])
+            });
+        }
     }
 }
