@@ -252,6 +252,66 @@ fn a_run_killed_midway_resumes_from_its_checkpoint_to_the_same_result() {
 }
 
 #[test]
+fn a_second_train_on_a_running_folder_is_refused_and_touches_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let train = |steps: &str| {
+        let mut args = vec![
+            "train",
+            "--task",
+            "reaching",
+            "--method",
+            "sac",
+            "--steps",
+            steps,
+            "--seed",
+            "1",
+            "--checkpoint-every",
+            "0",
+            "--out",
+            "run",
+        ];
+        args.extend(TINY);
+        args.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let mut first = std::process::Command::new(env!("CARGO_BIN_EXE_dualrep"))
+        .args(train("1000000"))
+        .current_dir(d)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // The first run holds the folder once it has written its configuration.
+    let metrics = d.join("run/metrics.csv");
+    while !metrics.exists() {
+        assert!(first.try_wait().unwrap().is_none(), "the first run ended");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let second = train("50");
+    let out = dualrep(&second.iter().map(String::as_str).collect::<Vec<_>>(), d);
+    assert!(!out.status.success(), "a second writer was let in");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("another `dualrep train` is writing"),
+        "{stderr}"
+    );
+    assert!(!d.join("run/summary.json").exists());
+    assert!(
+        first.try_wait().unwrap().is_none(),
+        "the refusal stopped the first run"
+    );
+
+    // Once the first run is gone (killed: its lock goes with it) the folder is free again.
+    first.kill().unwrap();
+    first.wait().unwrap();
+    let summary = ok(&dualrep(
+        &second.iter().map(String::as_str).collect::<Vec<_>>(),
+        d,
+    ));
+    assert_eq!(summary["steps"], 50);
+}
+
+#[test]
 fn bad_input_is_refused_with_a_clear_message() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();

@@ -337,6 +337,7 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
         }
     };
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    let _only_writer = lock_run_dir(&args.out)?;
     fs::write(
         args.out.join("config.json"),
         serde_json::to_vec_pretty(&config)?,
@@ -453,6 +454,26 @@ fn keep_kernels_of(bytes: &[u8], path: &Path, label: &str) -> anyhow::Result<()>
     );
     kernels::set_default_path(same);
     Ok(())
+}
+
+/// Hold an exclusive lock on the run's folder for as long as the returned handle lives, so
+/// that a second `train` on the same folder (a grid restarted while its old runs still go on,
+/// the same command typed twice) is refused instead of interleaving its rows with the first's
+/// and overwriting its checkpoint. The lock is the folder's own (flock), so no file is left
+/// behind, and the kernel drops it when the process ends, however it ends.
+fn lock_run_dir(out: &Path) -> anyhow::Result<File> {
+    let dir = File::open(out).with_context(|| format!("opening {}", out.display()))?;
+    match dir.try_lock() {
+        Ok(()) => Ok(dir),
+        Err(fs::TryLockError::WouldBlock) => anyhow::bail!(
+            "another `dualrep train` is writing {} (stop it, or wait for it to finish; this one \
+             would resume from its checkpoint)",
+            out.display()
+        ),
+        Err(fs::TryLockError::Error(e)) => {
+            Err(e).with_context(|| format!("locking {}", out.display()))
+        }
+    }
 }
 
 /// Cut `metrics.csv` back to its header and first `episodes` rows: the rows a run checkpoint
