@@ -1,6 +1,6 @@
 //! `Sac::update` allocates nothing of its own: with the suite's counting global allocator (per-thread
 //! counters), the only allocations during updates are, on the portable kernel path,
-//! matrixmultiply's packing buffers, exactly one per matrix product, all freed again, and on the
+//! matrixmultiply's packing buffers, one per matrix product, all freed again, and on the
 //! fast paths none at all, on one thread or two (see `rl_no_alloc.rs` for the same on bare MLPs).
 
 use dualrep::rl::kernels::{self, KernelPath};
@@ -12,18 +12,24 @@ use crate::support::counting_alloc;
 
 use counting_alloc::count;
 
-/// Matrix products of one gradient step with `layers` linear layers per network: forward
-/// passes `layers` each, a backward pass with parameter gradients `2 layers - 1`, an
-/// input-gradient-only pass `layers`.
-fn products_per_step(layers: usize, human: bool) -> usize {
+/// Matrix products of one gradient step with `layers` linear layers per network, fewest and
+/// most: forward passes `layers` each, a backward pass with parameter gradients
+/// `2 layers - 1`, an input-gradient-only pass `layers`. In the actor loss each sample's
+/// gradient goes back through one head of each twin pair only, so a head that no sample
+/// picked makes no pass at all: one pass per pair when all pick the same head, two otherwise.
+fn products_per_step(layers: usize, human: bool) -> (usize, usize) {
     let (forward, backward, backward_input) = (layers, 2 * layers - 1, layers);
     let twins = if human { 4 } else { 2 };
-    forward // actor at s
+    let rest = forward // actor at s
         + forward + 2 * forward // actor at s', both target critics
         + 2 * (forward + backward) // critics
         + if human { 2 * (forward + backward) } else { 0 } // human critics
-        + twins * (forward + backward_input) // critics in the actor loss
-        + backward // actor
+        + twins * forward // critics in the actor loss
+        + backward; // actor
+    (
+        rest + twins / 2 * backward_input,
+        rest + twins * backward_input,
+    )
 }
 
 #[test]
@@ -64,11 +70,17 @@ fn allocations_of_updates(path: KernelPath) {
             sac.update(&replay).unwrap();
             sac.update(&replay).unwrap();
         });
-        let expected = match path {
-            KernelPath::Portable => 2 * 3 * products_per_step(3, human),
-            _ => 0,
+        let (fewest, most) = match path {
+            KernelPath::Portable => {
+                let (fewest, most) = products_per_step(3, human);
+                (2 * 3 * fewest, 2 * 3 * most)
+            }
+            _ => (0, 0),
         };
-        assert_eq!(allocations, expected, "{path}, human critic {human}");
+        assert!(
+            (fewest..=most).contains(&allocations),
+            "{path}, human critic {human}: {allocations} allocations, not {fewest}..={most}"
+        );
         assert_eq!(live, 0, "nothing kept");
     }
 }

@@ -212,6 +212,33 @@ impl Mlp {
     pub fn backward_input(&self, ws: &mut MlpWorkspace) {
         backward(&self.layers, &self.params, None, ws, true);
     }
+
+    /// [`Mlp::backward_input`] of the samples `columns` of `ws` only (after a forward pass and
+    /// with dL/d output written there), computed in `sub`: column `c` of `sub.input_grad()` is
+    /// then dL/d input of sample `columns[c]`, the same bits as the whole batch's pass gives it.
+    /// For a loss whose gradient reaches this network from some samples only (the twin a
+    /// `min` picks), this skips the rest, whose input gradient is exactly zero.
+    pub fn backward_input_columns(
+        &self,
+        ws: &MlpWorkspace,
+        columns: &[usize],
+        sub: &mut MlpWorkspace,
+    ) {
+        ws.check_shape(&self.layers);
+        sub.gather_for_input_grad(ws, columns);
+        let m = columns.len();
+        for (l, layer) in self.layers.iter().enumerate().rev() {
+            let (below, above) = sub.grads.split_at_mut(l + 1);
+            let dz = &above[0].as_slice()[..layer.n_out * m];
+            let dx = &mut below[l].as_mut_slice()[..layer.n_in * m];
+            let relu_output = (l > 0).then(|| &sub.activations[l].as_slice()[..layer.n_in * m]);
+            let d = DenseLayer {
+                layer,
+                params: &self.params,
+            };
+            kernels::input_grad_columns(d, m, dz, dx, relu_output);
+        }
+    }
 }
 
 /// Layer by layer from the output: `ws.grads[l + 1]` holds dL/dz of layer `l` (for a hidden layer,
@@ -320,6 +347,54 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn an_input_gradient_on_some_columns_has_the_bits_of_the_whole_batch_pass() {
+        kernels::on_every_path(|path| {
+            for (n_in, hidden, batch) in [(10, [40, 30], 37), (10, [400, 300], 64), (3, [5, 4], 3)]
+            {
+                let mlp = Mlp::new(n_in, &hidden, 1, &mut ChaCha8Rng::seed_from_u64(5));
+                let mut whole = mlp.workspace(batch);
+                for (k, v) in whole.input_mut().iter_mut().enumerate() {
+                    *v = (k as f32 * 0.61).sin();
+                }
+                mlp.forward(&mut whole);
+                for picked in [
+                    vec![0],
+                    vec![batch - 1],
+                    (0..batch).step_by(2).collect::<Vec<_>>(),
+                    (1..batch).filter(|i| i % 3 != 0).collect(),
+                ] {
+                    // The whole batch's pass with dL/d output zero outside `picked`.
+                    for (i, g) in whole.output_grad_mut().iter_mut().enumerate() {
+                        *g = if picked.contains(&i) {
+                            (i as f32 * 0.37).cos()
+                        } else {
+                            0.0
+                        };
+                    }
+                    let mut sub = mlp.workspace(batch);
+                    mlp.backward_input_columns(&whole, &picked, &mut sub);
+                    mlp.backward_input(&mut whole);
+                    for (c, &i) in picked.iter().enumerate() {
+                        let got: Vec<u32> = sub
+                            .input_grad()
+                            .column(c)
+                            .iter()
+                            .map(|v| v.to_bits())
+                            .collect();
+                        let want: Vec<u32> = whole
+                            .input_grad()
+                            .column(i)
+                            .iter()
+                            .map(|v| v.to_bits())
+                            .collect();
+                        assert_eq!(got, want, "{path}: {hidden:?} batch {batch}, sample {i}");
+                    }
+                }
+            }
+        });
     }
 
     #[test]

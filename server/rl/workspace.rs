@@ -105,4 +105,26 @@ impl MlpWorkspace {
     pub fn input_grad(&self) -> &DMatrix<f32> {
         &self.grads[0]
     }
+
+    /// Copy what an input-gradient pass reads, the hidden ReLU outputs and dL/d output, of the
+    /// samples `columns` of `from` into this workspace's first `columns.len()` columns.
+    pub(super) fn gather_for_input_grad(&mut self, from: &MlpWorkspace, columns: &[usize]) {
+        assert_eq!(self.sizes, from.sizes, "workspaces of different shapes");
+        assert!(
+            columns.len() <= self.batch,
+            "more columns than this batch holds"
+        );
+        let last = self.sizes.len() - 1;
+        let hidden = self.activations[1..last]
+            .iter_mut()
+            .zip(&from.activations[1..last]);
+        let output_grad = std::iter::once((&mut self.grads[last], &from.grads[last]));
+        for (to, from) in hidden.chain(output_grad) {
+            let n = to.nrows();
+            let (to, from) = (to.as_mut_slice(), from.as_slice());
+            for (c, &j) in columns.iter().enumerate() {
+                to[c * n..(c + 1) * n].copy_from_slice(&from[j * n..(j + 1) * n]);
+            }
+        }
+    }
 }

@@ -71,20 +71,46 @@ pub(crate) fn input_grad(
     dx: &mut DMatrix<f32>,
     h: Option<&DMatrix<f32>>,
 ) {
-    let DenseLayer { layer, params } = d;
-    assert_eq!(dz.nrows(), layer.n_out, "layer output gradient");
-    assert_eq!(dx.shape(), (layer.n_in, dz.ncols()), "layer input gradient");
+    assert_eq!(dz.nrows(), d.layer.n_out, "layer output gradient");
+    assert_eq!(
+        dx.shape(),
+        (d.layer.n_in, dz.ncols()),
+        "layer input gradient"
+    );
     assert!(h.is_none_or(|h| h.shape() == dx.shape()), "ReLU output");
+    input_grad_columns(
+        d,
+        dz.ncols(),
+        dz.as_slice(),
+        dx.as_mut_slice(),
+        h.map(|h| h.as_slice()),
+    );
+}
+
+/// [`input_grad`] on `batch` columns held in plain slices (column-major, `n x batch`), such as
+/// the first columns of a workspace's buffers. Each output column depends on the same column of
+/// `dz` (and `h`) only, on every path, so a column computes the same bits in a batch of any size.
+pub(crate) fn input_grad_columns(
+    d: DenseLayer<'_>,
+    batch: usize,
+    dz: &[f32],
+    dx: &mut [f32],
+    h: Option<&[f32]>,
+) {
+    let DenseLayer { layer, params } = d;
+    assert_eq!(dz.len(), layer.n_out * batch, "layer output gradient");
+    assert_eq!(dx.len(), layer.n_in * batch, "layer input gradient");
+    assert!(h.is_none_or(|h| h.len() == dx.len()), "ReLU output");
     match current_path().isa() {
-        None => portable::input_grad(layer, params, dz, dx, h),
+        None => portable::input_grad(layer, params, batch, dz, dx, h),
         Some(isa) => dualrep_kernels::input_grad(
             isa,
             threads_now(),
-            (layer.n_in, layer.n_out, dz.ncols()),
+            (layer.n_in, layer.n_out, batch),
             layer.weight(params),
-            dz.as_slice(),
-            dx.as_mut_slice(),
-            h.map(|h| h.as_slice()),
+            dz,
+            dx,
+            h,
         ),
     }
 }

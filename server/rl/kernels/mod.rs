@@ -42,7 +42,7 @@ use std::sync::atomic::{AtomicU8, AtomicUsize, Ordering};
 
 use serde::{Deserialize, Serialize};
 
-pub(crate) use dense::{DenseLayer, forward_layer, input_grad, weight_grad};
+pub(crate) use dense::{DenseLayer, forward_layer, input_grad, input_grad_columns, weight_grad};
 pub use dualrep_kernels::Isa;
 
 /// Which kernels compute the networks' products.

@@ -60,17 +60,26 @@ pub(super) fn weight_grad(layer: &Linear, grads: &mut [f32], x: &DMatrix<f32>, d
     }
 }
 
-/// `dx = W^T dz`, then through the ReLU that produced `h` (`dh/dz = [h > 0]`), if given.
+/// `dx = W^T dz` on `batch` columns (column-major slices), then through the ReLU that produced
+/// `h` (`dh/dz = [h > 0]`), if given.
 pub(super) fn input_grad(
     layer: &Linear,
     params: &[f32],
-    dz: &DMatrix<f32>,
-    dx: &mut DMatrix<f32>,
-    h: Option<&DMatrix<f32>>,
+    batch: usize,
+    dz: &[f32],
+    dx: &mut [f32],
+    h: Option<&[f32]>,
 ) {
-    gemm(1.0, &layer.w_t(params), dz, 0.0, dx);
+    let dz = DMatrixView::from_slice(dz, layer.n_out, batch);
+    gemm(
+        1.0,
+        &layer.w_t(params),
+        &dz,
+        0.0,
+        &mut DMatrixViewMut::from_slice(dx, layer.n_in, batch),
+    );
     if let Some(h) = h {
-        for (g, &h) in dx.as_mut_slice().iter_mut().zip(h.as_slice()) {
+        for (g, &h) in dx.iter_mut().zip(h) {
             // A select with an unconditional store, not a conditional store: it vectorises
             // (the branchy form cost a fifth of a Lunar Lander update).
             *g = if h <= 0.0 { 0.0 } else { *g };

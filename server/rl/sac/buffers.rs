@@ -33,6 +33,45 @@ pub(super) struct StepBuffers {
     pub q2_ws: MlpWorkspace,
     /// `None` without a human critic.
     pub h_ws: Option<[MlpWorkspace; 2]>,
+    /// Which head of each twin pair the actor loss's `min` picked, per sample: the environment
+    /// critics' and the human critics'. Its gradient reaches each head through those samples only.
+    pub picks_q: TwinPicks,
+    pub picks_h: TwinPicks,
+    /// Where a frozen critic passes the actor loss's gradient back through its picked samples.
+    pub picked_ws: MlpWorkspace,
+}
+
+/// The samples of a batch split between the two heads of a twin pair, in order, in buffers
+/// allocated once.
+#[derive(Clone, Debug)]
+pub(super) struct TwinPicks {
+    heads: [Vec<usize>; 2],
+    len: [usize; 2],
+}
+
+impl TwinPicks {
+    fn new(batch_size: usize) -> Self {
+        Self {
+            heads: [vec![0; batch_size], vec![0; batch_size]],
+            len: [0; 2],
+        }
+    }
+
+    pub fn clear(&mut self) {
+        self.len = [0; 2];
+    }
+
+    /// Sample `i` goes to the first head if `first`, else to the second.
+    pub fn push(&mut self, i: usize, first: bool) {
+        let j = usize::from(!first);
+        self.heads[j][self.len[j]] = i;
+        self.len[j] += 1;
+    }
+
+    /// The samples of head `j` (0 or 1), in increasing order.
+    pub fn head(&self, j: usize) -> &[usize] {
+        &self.heads[j][..self.len[j]]
+    }
 }
 
 impl StepBuffers {
@@ -62,6 +101,9 @@ impl StepBuffers {
             q2_ws: critic.workspace(batch_size),
             h_ws: human_critic
                 .then(|| [critic.workspace(batch_size), critic.workspace(batch_size)]),
+            picks_q: TwinPicks::new(batch_size),
+            picks_h: TwinPicks::new(batch_size),
+            picked_ws: critic.workspace(batch_size),
         }
     }
 }

@@ -177,6 +177,8 @@ impl Sac {
         // Per sample: the value the actor maximises, and dL/d(critic output) per critic
         // (torch.min sends the gradient to the first minimum).
         let mut objective_sum = 0.0f64;
+        b.picks_q.clear();
+        b.picks_h.clear();
         match &mut human {
             None => {
                 for i in 0..n {
@@ -185,6 +187,7 @@ impl Sac {
                     objective_sum += f64::from(ent_coef * b.log_pi[i] - min_qf_pi);
                     b.q1_ws.output_grad_mut()[i] = if q1 <= q2 { -inv_n } else { 0.0 };
                     b.q2_ws.output_grad_mut()[i] = if q1 <= q2 { 0.0 } else { -inv_n };
+                    b.picks_q.push(i, q1 <= q2);
                 }
             }
             Some((_, h1_ws, h2_ws, config)) => {
@@ -200,6 +203,8 @@ impl Sac {
                             let mixed = [w_q * q[0] + w_h * h[0], w_q * q[1] + w_h * h[1]];
                             let first = mixed[0] <= mixed[1];
                             let j = if first { [1.0, 0.0] } else { [0.0, 1.0] };
+                            b.picks_q.push(i, first);
+                            b.picks_h.push(i, first);
                             (
                                 mixed[0].min(mixed[1]),
                                 j.map(|s| s * w_q),
@@ -210,6 +215,8 @@ impl Sac {
                             // Eq. 5 as printed: min_j Q_j + lambda min_j H_j.
                             let jq = if q[0] <= q[1] { [1.0, 0.0] } else { [0.0, 1.0] };
                             let jh = if h[0] <= h[1] { [1.0, 0.0] } else { [0.0, 1.0] };
+                            b.picks_q.push(i, q[0] <= q[1]);
+                            b.picks_h.push(i, h[0] <= h[1]);
                             let value = q[0].min(q[1]) + lambda * h[0].min(h[1]);
                             (value, jq, jh.map(|s| s * lambda))
                         }
@@ -223,17 +230,16 @@ impl Sac {
             }
         }
 
-        // dL/d a_pi: the sum over the frozen critics of their input gradient's action rows.
+        // dL/d a_pi: the sum over the frozen critics of their input gradient's action rows,
+        // each through the samples whose min picked it (the rest of its gradient is zero).
         b.dl_da.fill(0.0);
-        self.q1.backward_input(&mut b.q1_ws);
-        add_action_grad(&b.q1_ws, &mut b.dl_da);
-        self.q2.backward_input(&mut b.q2_ws);
-        add_action_grad(&b.q2_ws, &mut b.dl_da);
+        let (picks_q, sub) = (&b.picks_q, &mut b.picked_ws);
+        add_picked_action_grad(&self.q1, &mut b.q1_ws, picks_q.head(0), sub, &mut b.dl_da);
+        add_picked_action_grad(&self.q2, &mut b.q2_ws, picks_q.head(1), sub, &mut b.dl_da);
         if let Some((hc, h1_ws, h2_ws, _)) = human {
-            hc.h1.backward_input(h1_ws);
-            add_action_grad(h1_ws, &mut b.dl_da);
-            hc.h2.backward_input(h2_ws);
-            add_action_grad(h2_ws, &mut b.dl_da);
+            let picks_h = &b.picks_h;
+            add_picked_action_grad(&hc.h1, h1_ws, picks_h.head(0), sub, &mut b.dl_da);
+            add_picked_action_grad(&hc.h2, h2_ws, picks_h.head(1), sub, &mut b.dl_da);
         }
 
         // Through tanh and the Gaussian to [mu; log_std]; dL/d log_pi = ent_coef / n.
@@ -327,6 +333,38 @@ fn masked_mse_loss(prediction: &[f32], target: &[f32], mask: &[f32], grad: &mut 
         }
     }
     (sum / n as f64) as f32
+}
+
+/// `dl_da += ` the action rows of a frozen critic's input gradient at the samples `picked` only
+/// (after its forward pass, with dL/d output in `ws`, zero at every other sample). Those samples
+/// pass back in `sub`, each with the bits the whole batch's pass gives it; the others add an
+/// exact zero, so skipping them changes nothing but the time: half of the actor loss's backward
+/// work, since each sample's min picks one head of two.
+fn add_picked_action_grad(
+    net: &Mlp,
+    ws: &mut MlpWorkspace,
+    picked: &[usize],
+    sub: &mut MlpWorkspace,
+    dl_da: &mut [f32],
+) {
+    if picked.len() == ws.batch() {
+        net.backward_input(ws);
+        add_action_grad(ws, dl_da);
+        return;
+    }
+    if picked.is_empty() {
+        return;
+    }
+    net.backward_input_columns(ws, picked, sub);
+    let n_in = ws.input().nrows();
+    let act_dim = dl_da.len() / ws.batch();
+    let input_grad = sub.input_grad().as_slice().chunks_exact(n_in);
+    for (column, &i) in input_grad.zip(picked) {
+        let d = &mut dl_da[i * act_dim..(i + 1) * act_dim];
+        for (d, g) in d.iter_mut().zip(&column[n_in - act_dim..]) {
+            *d += g;
+        }
+    }
 }
 
 /// `dl_da += ` the action rows of a critic's input gradient (`[s; a]` per column).
