@@ -460,18 +460,24 @@ fn keep_kernels_of(bytes: &[u8], path: &Path, label: &str) -> anyhow::Result<()>
 /// that a second `train` on the same folder (a grid restarted while its old runs still go on,
 /// the same command typed twice) is refused instead of interleaving its rows with the first's
 /// and overwriting its checkpoint. The lock is the folder's own (flock), so no file is left
-/// behind, and the kernel drops it when the process ends, however it ends.
-fn lock_run_dir(out: &Path) -> anyhow::Result<File> {
+/// behind, and the kernel drops it when the process ends, however it ends. A file system that
+/// cannot lock a folder (some network mounts a cluster's nodes share) gets a warning, not a
+/// refusal: the run goes on unguarded, as before there was a lock.
+fn lock_run_dir(out: &Path) -> anyhow::Result<Option<File>> {
     let dir = File::open(out).with_context(|| format!("opening {}", out.display()))?;
     match dir.try_lock() {
-        Ok(()) => Ok(dir),
+        Ok(()) => Ok(Some(dir)),
         Err(fs::TryLockError::WouldBlock) => anyhow::bail!(
             "another `dualrep train` is writing {} (stop it, or wait for it to finish; this one \
              would resume from its checkpoint)",
             out.display()
         ),
         Err(fs::TryLockError::Error(e)) => {
-            Err(e).with_context(|| format!("locking {}", out.display()))
+            eprintln!(
+                "warning: cannot lock {} ({e}); a second `dualrep train` on it would not be refused",
+                out.display()
+            );
+            Ok(None)
         }
     }
 }
