@@ -71,6 +71,53 @@ fn sim_is_reproducible_from_its_seed() {
     assert_eq!(strip(dualrep(&args)), strip(dualrep(&args)));
 }
 
+#[test]
+fn bench_sac_reports_the_work_it_skips_beside_the_nominal_work() {
+    // Reaching's sizes with the human critic: obs 15, act 4, [64, 64], batch 512 (debug build,
+    // so the rates mean nothing; the arithmetic does).
+    let out = dualrep(&[
+        "bench",
+        "sac",
+        "--task",
+        "reaching",
+        "--hidden",
+        "16,16",
+        "--batch",
+        "64",
+        "--seconds",
+        "0.3",
+        "--kernels",
+        "portable",
+        "--threads",
+        "1",
+    ]);
+    assert!(
+        out.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let (obs, act) = (
+        v["obs_dim"].as_f64().unwrap(),
+        v["act_dim"].as_f64().unwrap(),
+    );
+    let per_column = 2.0 * ((obs + act) * 16.0 + 16.0 * 16.0 + 16.0) / 1e6;
+    let nominal = v["mflop_per_update"].as_f64().unwrap();
+    let done = v["mflop_done_per_update"].as_f64().unwrap();
+    // Four frozen critics in the actor loss; each sample passes back through one head of each
+    // of the two twin pairs: 2 x 64 of the 4 x 64 columns are skipped.
+    let skipped_columns = (nominal - done) / per_column;
+    assert!(
+        (skipped_columns - 2.0 * 64.0).abs() < 1e-6,
+        "{skipped_columns} columns skipped per update: {v}"
+    );
+    let (nominal_rate, done_rate) = (
+        v["fraction_of_fma_peak"].as_f64().unwrap(),
+        v["fraction_of_fma_peak_done"].as_f64().unwrap(),
+    );
+    assert!(done_rate < nominal_rate, "{v}");
+}
+
 fn assert_rejected(args: &[&str], expected_in_message: &str) {
     let out = dualrep(args);
     assert!(!out.status.success(), "{args:?} should fail");

@@ -33,7 +33,7 @@ use crate::guidance::drpl::belief::{Belief, BeliefConfig, Response};
 use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::rl::kernels::{self, KernelPath};
 use crate::rl::replay::{ReplayBuffer, Transition};
-use crate::rl::sac::{Sac, mflop_per_update};
+use crate::rl::sac::{Sac, mflop_per_update, mflop_skipped_per_update};
 use crate::settings::Settings;
 use crate::sim::Task;
 
@@ -120,6 +120,11 @@ struct SacBench {
     /// this CPU has, which matrixmultiply uses).
     fma_peak_gflops: f64,
     fraction_of_fma_peak: f64,
+    /// The arithmetic the update actually did: `mflop_per_update` (what PyTorch computes) less
+    /// the input-gradient passes the actor loss skips (for each sample, the twin its `min` did
+    /// not pick); and that work's rate against the FMA peak.
+    mflop_done_per_update: f64,
+    fraction_of_fma_peak_done: f64,
     /// matrixmultiply's `sgemm` at 256^3 on one thread.
     sgemm_gflops: f64,
     fraction_of_sgemm: f64,
@@ -200,6 +205,8 @@ fn bench_sac_on(args: SacBenchArgs, path: KernelPath, threads: usize) -> anyhow:
     let updates_per_second = 1.0 / median(&mut times);
     let mflop = mflop_per_update(obs_dim, act_dim, &config);
     let gflops = updates_per_second * mflop / 1000.0;
+    let mflop_done = mflop - mflop_skipped_per_update(obs_dim, act_dim, &config);
+    let gflops_done = updates_per_second * mflop_done / 1000.0;
     let ceiling_budget = Duration::from_secs_f64(args.seconds.min(2.0));
     let fma_peak_gflops = path.fma_peak_gflops(threads, ceiling_budget);
     let sgemm_gflops = sgemm_gflops(256, ceiling_budget);
@@ -218,6 +225,8 @@ fn bench_sac_on(args: SacBenchArgs, path: KernelPath, threads: usize) -> anyhow:
         gflops,
         fma_peak_gflops,
         fraction_of_fma_peak: gflops / fma_peak_gflops,
+        mflop_done_per_update: mflop_done,
+        fraction_of_fma_peak_done: gflops_done / fma_peak_gflops,
         sgemm_gflops,
         fraction_of_sgemm: gflops / sgemm_gflops,
     };

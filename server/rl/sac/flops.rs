@@ -35,6 +35,21 @@ pub fn mflop_per_update(obs_dim: usize, act_dim: usize, config: &SacConfig) -> f
     2.0 * step * config.gradient_steps as f64 / 1e6
 }
 
+/// MFLOP of [`mflop_per_update`] that the update does not compute. The actor loss takes a
+/// `min` over each twin pair per sample, so each sample's gradient reaches one head of the pair;
+/// `update.rs` passes it back through that head only, and the other head's input-gradient pass
+/// for that sample (an exact zero) is skipped: one critic's `backward_input` per sample and pair.
+pub fn mflop_skipped_per_update(obs_dim: usize, act_dim: usize, config: &SacConfig) -> f64 {
+    let sizes: Vec<usize> = std::iter::once(obs_dim + act_dim)
+        .chain(config.hidden.iter().copied())
+        .chain(std::iter::once(1))
+        .collect();
+    let macs_per_sample: usize = sizes.windows(2).map(|p| p[0] * p[1]).sum();
+    let pairs = if config.human_critic.is_some() { 2 } else { 1 };
+    let samples = (pairs * config.batch_size * config.gradient_steps) as f64;
+    2.0 * samples * macs_per_sample as f64 / 1e6
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -54,6 +69,21 @@ mod tests {
             mflop_per_update(1, 1, &config),
             2.0 * (86.0 + 28.0 + 24.0) / 1e6
         );
+    }
+
+    #[test]
+    fn the_actor_loss_skips_one_head_per_twin_pair_and_sample() {
+        let mut config = SacConfig::for_task(Task::LunarLander);
+        let per_sample = 2.0 * (10.0 * 400.0 + 400.0 * 300.0 + 300.0) / 1e6;
+        // Twin critics and twin human critics: two pairs.
+        let skipped = mflop_skipped_per_update(8, 2, &config);
+        assert!(
+            (skipped - 2.0 * 512.0 * per_sample).abs() < 1e-9,
+            "{skipped}"
+        );
+        config.human_critic = None;
+        let skipped = mflop_skipped_per_update(8, 2, &config);
+        assert!((skipped - 512.0 * per_sample).abs() < 1e-9, "{skipped}");
     }
 
     #[test]

@@ -9,7 +9,8 @@
 //!   (Eq. 3), actor (Eq. 5), Polyak.
 //! - `buffers`: what a gradient step writes, allocated once.
 //! - [`checkpoint`]: everything needed to resume, as safetensors bytes.
-//! - `flops`: [`mflop_per_update`], the arithmetic of one update, for the benchmark.
+//! - `flops`: [`mflop_per_update`], the arithmetic of one update, and what the actor loss skips
+//!   of it ([`mflop_skipped_per_update`]), for the benchmark.
 //!
 //! No IO here: a checkpoint is bytes, written by the caller.
 
@@ -34,7 +35,7 @@ use buffers::{StepBuffers, fill_critic_input};
 
 pub use checkpoint::CheckpointError;
 pub use config::{ActorMix, HumanCriticConfig, SacConfig};
-pub use flops::mflop_per_update;
+pub use flops::{mflop_per_update, mflop_skipped_per_update};
 
 /// Losses and temperature of an update, averaged over its gradient steps.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
