@@ -377,20 +377,19 @@ mod tests {
                     let mut sub = mlp.workspace(batch);
                     mlp.backward_input_columns(&whole, &picked, &mut sub);
                     mlp.backward_input(&mut whole);
-                    for (c, &i) in picked.iter().enumerate() {
-                        let got: Vec<u32> = sub
-                            .input_grad()
+                    let bits = |ws: &MlpWorkspace, c: usize| -> Vec<u32> {
+                        ws.input_grad()
                             .column(c)
                             .iter()
                             .map(|v| v.to_bits())
-                            .collect();
-                        let want: Vec<u32> = whole
-                            .input_grad()
-                            .column(i)
-                            .iter()
-                            .map(|v| v.to_bits())
-                            .collect();
-                        assert_eq!(got, want, "{path}: {hidden:?} batch {batch}, sample {i}");
+                            .collect()
+                    };
+                    for (c, &i) in picked.iter().enumerate() {
+                        assert_eq!(
+                            bits(&sub, c),
+                            bits(&whole, i),
+                            "{path}: {hidden:?} batch {batch}, sample {i}"
+                        );
                     }
                 }
             }

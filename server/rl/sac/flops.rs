@@ -12,12 +12,7 @@ use super::SacConfig;
 pub fn mflop_per_update(obs_dim: usize, act_dim: usize, config: &SacConfig) -> f64 {
     let batch = config.batch_size as f64;
     let macs = |n_in: usize, n_out: usize| {
-        let sizes: Vec<usize> = std::iter::once(n_in)
-            .chain(config.hidden.iter().copied())
-            .chain(std::iter::once(n_out))
-            .collect();
-        let forward: f64 = sizes.windows(2).map(|p| (p[0] * p[1]) as f64).sum();
-        let first_layer = (sizes[0] * sizes[1]) as f64;
+        let (forward, first_layer) = macs_per_sample(n_in, n_out, config);
         (forward * batch, first_layer * batch)
     };
     let (actor, actor_first) = macs(obs_dim, 2 * act_dim);
@@ -40,14 +35,21 @@ pub fn mflop_per_update(obs_dim: usize, act_dim: usize, config: &SacConfig) -> f
 /// `update.rs` passes it back through that head only, and the other head's input-gradient pass
 /// for that sample (an exact zero) is skipped: one critic's `backward_input` per sample and pair.
 pub fn mflop_skipped_per_update(obs_dim: usize, act_dim: usize, config: &SacConfig) -> f64 {
-    let sizes: Vec<usize> = std::iter::once(obs_dim + act_dim)
-        .chain(config.hidden.iter().copied())
-        .chain(std::iter::once(1))
-        .collect();
-    let macs_per_sample: usize = sizes.windows(2).map(|p| p[0] * p[1]).sum();
+    let (critic, _) = macs_per_sample(obs_dim + act_dim, 1, config);
     let pairs = if config.human_critic.is_some() { 2 } else { 1 };
     let samples = (pairs * config.batch_size * config.gradient_steps) as f64;
-    2.0 * samples * macs_per_sample as f64 / 1e6
+    2.0 * samples * critic / 1e6
+}
+
+/// Multiply-adds of one sample's forward pass through `n_in -> hidden -> n_out`, and of its
+/// first layer alone.
+fn macs_per_sample(n_in: usize, n_out: usize, config: &SacConfig) -> (f64, f64) {
+    let sizes: Vec<usize> = std::iter::once(n_in)
+        .chain(config.hidden.iter().copied())
+        .chain(std::iter::once(n_out))
+        .collect();
+    let forward: f64 = sizes.windows(2).map(|p| (p[0] * p[1]) as f64).sum();
+    (forward, (sizes[0] * sizes[1]) as f64)
 }
 
 #[cfg(test)]
