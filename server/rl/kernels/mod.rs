@@ -28,12 +28,14 @@
 //! whole output elements, so results do not depend on the number of threads. The number is
 //! [`threads_now`]: the process maximum ([`set_max_threads`], default 1), shared out between
 //! the learners that train at once ([`ActiveLearner`]), or a per-thread choice
-//! ([`with_threads`]).
+//! ([`with_threads`]). Independent networks (the twin critics) can instead run side by side,
+//! one thread each ([`side_by_side`]).
 
 mod dense;
 #[cfg(test)]
 mod equivalence_tests;
 mod portable;
+mod side_by_side;
 
 use std::cell::Cell;
 use std::fmt;
@@ -44,6 +46,7 @@ use serde::{Deserialize, Serialize};
 
 pub(crate) use dense::{DenseLayer, forward_layer, input_grad, input_grad_columns, weight_grad};
 pub use dualrep_kernels::Isa;
+pub use side_by_side::side_by_side;
 
 /// Which kernels compute the networks' products.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, utoipa::ToSchema)]
@@ -252,7 +255,7 @@ impl<T: Copy + 'static> Drop for Restore<T> {
 static MAX_THREADS: AtomicUsize = AtomicUsize::new(1);
 static ACTIVE_LEARNERS: AtomicUsize = AtomicUsize::new(0);
 
-/// The most threads one learner's products may use (default 1).
+/// The most threads one learner may use (default 1).
 pub fn set_max_threads(n: usize) {
     MAX_THREADS.store(n.max(1), Ordering::Relaxed);
 }

@@ -37,8 +37,9 @@ pub(super) struct StepBuffers {
     /// critics' and the human critics'. Its gradient reaches each head through those samples only.
     pub picks_q: TwinPicks,
     pub picks_h: TwinPicks,
-    /// Where a frozen critic passes the actor loss's gradient back through its picked samples.
-    pub picked_ws: MlpWorkspace,
+    /// Where a frozen critic passes the actor loss's gradient back through its picked samples:
+    /// one per twin, since the twins do so side by side.
+    pub picked_ws: [MlpWorkspace; 2],
 }
 
 /// The samples of a batch split between the two heads of a twin pair, in order, in buffers
@@ -103,7 +104,7 @@ impl StepBuffers {
                 .then(|| [critic.workspace(batch_size), critic.workspace(batch_size)]),
             picks_q: TwinPicks::new(batch_size),
             picks_h: TwinPicks::new(batch_size),
-            picked_ws: critic.workspace(batch_size),
+            picked_ws: [critic.workspace(batch_size), critic.workspace(batch_size)],
         }
     }
 }

@@ -13,7 +13,12 @@
 //!
 //! Each loss is a method that writes its gradient and returns its value, so the tests can
 //! check each gradient by finite differences; [`Sac::gradient_step`] strings them together.
+//!
+//! On two threads or more the twins of each pair (Q1 and Q2, H1 and H2, the two targets) make
+//! their passes side by side, one thread each (`kernels::side_by_side`), instead of splitting
+//! every product between the threads; the results are the same bits as one after the other.
 
+use crate::rl::kernels::side_by_side;
 use crate::rl::mse_loss;
 use crate::rl::squashed_gaussian;
 use crate::rl::{Mlp, MlpWorkspace};
@@ -56,8 +61,12 @@ impl Sac {
 
         // 7. Polyak averaging of the environment critics' targets.
         let tau = self.config.tau;
-        self.q1_target.soft_update_from(&self.q1, tau);
-        self.q2_target.soft_update_from(&self.q2, tau);
+        let (q1_target, q2_target) = (&mut self.q1_target, &mut self.q2_target);
+        let (q1, q2) = (&self.q1, &self.q2);
+        side_by_side(
+            || q1_target.soft_update_from(q1, tau),
+            || q2_target.soft_update_from(q2, tau),
+        );
 
         self.updates += 1;
         UpdateStats {
@@ -95,13 +104,16 @@ impl Sac {
             &mut b.next_actions,
             &mut b.next_log_pi,
         );
-        for (q_target, ws) in [
-            (&self.q1_target, &mut b.q1_ws),
-            (&self.q2_target, &mut b.q2_ws),
-        ] {
-            fill_critic_input(ws, &b.batch.next_obs, &b.next_actions);
+        let (next_obs, next_actions) = (&b.batch.next_obs, &b.next_actions);
+        let target_forward = |q_target: &Mlp, ws: &mut MlpWorkspace| {
+            fill_critic_input(ws, next_obs, next_actions);
             q_target.forward(ws);
-        }
+        };
+        let (q1_ws, q2_ws) = (&mut b.q1_ws, &mut b.q2_ws);
+        side_by_side(
+            || target_forward(&self.q1_target, q1_ws),
+            || target_forward(&self.q2_target, q2_ws),
+        );
         let gamma = self.config.gamma;
         let (q1_next, q2_next) = (b.q1_ws.output().as_slice(), b.q2_ws.output().as_slice());
         for (i, y) in b.target_q_values.iter_mut().enumerate() {
@@ -114,12 +126,15 @@ impl Sac {
     /// Step 4 (Eq. 4): `0.5 sum_j mse(Q_j(s, a), y)`; overwrites both critics' gradients.
     pub(super) fn critic_loss(&mut self) -> f32 {
         let b = &mut self.buffers;
-        let mut critic_loss = 0.0;
-        for (q, ws) in [(&mut self.q1, &mut b.q1_ws), (&mut self.q2, &mut b.q2_ws)] {
-            fill_critic_input(ws, &b.batch.obs, &b.batch.actions);
-            critic_loss += 0.5 * regress(q, ws, &b.target_q_values, None);
-        }
-        critic_loss
+        let (batch, target) = (&b.batch, &b.target_q_values);
+        let loss = |q: &mut Mlp, ws: &mut MlpWorkspace| {
+            fill_critic_input(ws, &batch.obs, &batch.actions);
+            regress(q, ws, target, None)
+        };
+        let (q1_ws, q2_ws) = (&mut b.q1_ws, &mut b.q2_ws);
+        let (q1, q2) = (&mut self.q1, &mut self.q2);
+        let losses = side_by_side(|| loss(q1, q1_ws), || loss(q2, q2_ws));
+        sum_of_halves(losses)
     }
 
     /// Step 5 (Eq. 3): `0.5 sum_j mse(H_j(s, a), H)` on the immediate feedback, over every row
@@ -136,12 +151,12 @@ impl Sac {
             return None;
         }
         let HumanCritic { h1, h2, .. } = hc;
-        let mut human_critic_loss = 0.0;
-        for (h, ws) in [(h1, h1_ws), (h2, h2_ws)] {
+        let loss = |h: &mut Mlp, ws: &mut MlpWorkspace| {
             fill_critic_input(ws, &batch.obs, &batch.actions);
-            human_critic_loss += 0.5 * regress(h, ws, &batch.human, mask.then_some(&batch.human));
-        }
-        Some(human_critic_loss)
+            regress(h, ws, &batch.human, mask.then_some(&batch.human))
+        };
+        let losses = side_by_side(|| loss(h1, h1_ws), || loss(h2, h2_ws));
+        Some(sum_of_halves(losses))
     }
 
     /// Step 6 (Eq. 5) at `(s, a_pi)` from step 1, writing the actor's gradient:
@@ -159,20 +174,34 @@ impl Sac {
         let n = b.log_pi.len();
         let inv_n = 1.0 / n as f32;
         let (obs, a_pi) = (&b.batch.obs, &b.a_pi);
-        for (q, ws) in [(&self.q1, &mut b.q1_ws), (&self.q2, &mut b.q2_ws)] {
+        let forward = |net: &Mlp, ws: &mut MlpWorkspace| {
             fill_critic_input(ws, obs, a_pi);
-            q.forward(ws);
-        }
+            net.forward(ws);
+        };
         let mut human = match (&self.human_critic, &mut b.h_ws, &self.config.human_critic) {
-            (Some(hc), Some([h1_ws, h2_ws]), Some(config)) => {
-                for (h, ws) in [(&hc.h1, &mut *h1_ws), (&hc.h2, &mut *h2_ws)] {
-                    fill_critic_input(ws, obs, a_pi);
-                    h.forward(ws);
-                }
-                Some((hc, h1_ws, h2_ws, config))
-            }
+            (Some(hc), Some([h1_ws, h2_ws]), Some(config)) => Some((hc, h1_ws, h2_ws, config)),
             _ => None,
         };
+        // Each side: one twin of each pair.
+        let (q1_ws, q2_ws) = (&mut b.q1_ws, &mut b.q2_ws);
+        let h_sides = human
+            .as_mut()
+            .map(|(hc, h1_ws, h2_ws, _)| ((&hc.h1, &mut **h1_ws), (&hc.h2, &mut **h2_ws)));
+        let (h1_side, h2_side) = h_sides.unzip();
+        side_by_side(
+            || {
+                forward(&self.q1, q1_ws);
+                if let Some((h1, ws)) = h1_side {
+                    forward(h1, ws);
+                }
+            },
+            || {
+                forward(&self.q2, q2_ws);
+                if let Some((h2, ws)) = h2_side {
+                    forward(h2, ws);
+                }
+            },
+        );
 
         // Per sample: the value the actor maximises, and dL/d(critic output) per critic
         // (torch.min sends the gradient to the first minimum).
@@ -232,14 +261,27 @@ impl Sac {
 
         // dL/d a_pi: the sum over the frozen critics of their input gradient's action rows,
         // each through the samples whose min picked it (the rest of its gradient is zero).
+        // The twins pass back side by side; their action rows are added in a fixed order
+        // (q1, q2, h1, h2), so the sums do not depend on which finished first.
         b.dl_da.fill(0.0);
-        let (picks_q, sub) = (&b.picks_q, &mut b.picked_ws);
-        add_picked_action_grad(&self.q1, &mut b.q1_ws, picks_q.head(0), sub, &mut b.dl_da);
-        add_picked_action_grad(&self.q2, &mut b.q2_ws, picks_q.head(1), sub, &mut b.dl_da);
+        let [sub_1, sub_2] = &mut b.picked_ws;
+        let (picks_q, dl_da) = (&b.picks_q, &mut b.dl_da);
+        let (q1_ws, q2_ws) = (&mut b.q1_ws, &mut b.q2_ws);
+        let (q1_picked, q2_picked) = (picks_q.head(0), picks_q.head(1));
+        side_by_side(
+            || pass_back_picked(&self.q1, q1_ws, q1_picked, sub_1),
+            || pass_back_picked(&self.q2, q2_ws, q2_picked, sub_2),
+        );
+        add_picked_action_grad(q1_ws, q1_picked, sub_1, dl_da);
+        add_picked_action_grad(q2_ws, q2_picked, sub_2, dl_da);
         if let Some((hc, h1_ws, h2_ws, _)) = human {
-            let picks_h = &b.picks_h;
-            add_picked_action_grad(&hc.h1, h1_ws, picks_h.head(0), sub, &mut b.dl_da);
-            add_picked_action_grad(&hc.h2, h2_ws, picks_h.head(1), sub, &mut b.dl_da);
+            let (h1_picked, h2_picked) = (b.picks_h.head(0), b.picks_h.head(1));
+            side_by_side(
+                || pass_back_picked(&hc.h1, h1_ws, h1_picked, sub_1),
+                || pass_back_picked(&hc.h2, h2_ws, h2_picked, sub_2),
+            );
+            add_picked_action_grad(h1_ws, h1_picked, sub_1, dl_da);
+            add_picked_action_grad(h2_ws, h2_picked, sub_2, dl_da);
         }
 
         // Through tanh and the Gaussian to [mu; log_std]; dL/d log_pi = ent_coef / n.
@@ -299,6 +341,14 @@ fn sample_policy(
     }
 }
 
+/// SB3's `0.5 * sum_j` of the twins' losses, `j` in order.
+fn sum_of_halves((first, second): (f32, f32)) -> f32 {
+    let mut sum = 0.0;
+    sum += 0.5 * first;
+    sum += 0.5 * second;
+    sum
+}
+
 /// `mse(net(input), target)` (mean over the rows where `mask != 0`, if given), scaled by 0.5
 /// in the gradient (SB3's `0.5 * sum_j` over twins): zero the net's gradient, forward, backward.
 /// Returns the unscaled mse.
@@ -335,27 +385,33 @@ fn masked_mse_loss(prediction: &[f32], target: &[f32], mask: &[f32], grad: &mut 
     (sum / n as f64) as f32
 }
 
-/// `dl_da += ` the action rows of a frozen critic's input gradient at the samples `picked` only
-/// (after its forward pass, with dL/d output in `ws`, zero at every other sample). Those samples
-/// pass back in `sub`, each with the bits the whole batch's pass gives it; the others add an
-/// exact zero, so skipping them changes nothing but the time: half of the actor loss's backward
-/// work, since each sample's min picks one head of two.
+/// A frozen critic's input gradient at the samples `picked` only (after its forward pass, with
+/// dL/d output in `ws`, zero at every other sample): in `ws` when every sample picked it, else
+/// in `sub`, each sample with the bits the whole batch's pass gives it. The other samples'
+/// gradient is an exact zero, so skipping them changes nothing but the time: half of the actor
+/// loss's backward work, since each sample's min picks one head of two.
+fn pass_back_picked(net: &Mlp, ws: &mut MlpWorkspace, picked: &[usize], sub: &mut MlpWorkspace) {
+    if picked.len() == ws.batch() {
+        net.backward_input(ws);
+    } else if !picked.is_empty() {
+        net.backward_input_columns(ws, picked, sub);
+    }
+}
+
+/// `dl_da += ` the action rows of what [`pass_back_picked`] computed for the same `picked`.
 fn add_picked_action_grad(
-    net: &Mlp,
-    ws: &mut MlpWorkspace,
+    ws: &MlpWorkspace,
     picked: &[usize],
-    sub: &mut MlpWorkspace,
+    sub: &MlpWorkspace,
     dl_da: &mut [f32],
 ) {
     if picked.len() == ws.batch() {
-        net.backward_input(ws);
         add_action_grad(ws, dl_da);
         return;
     }
     if picked.is_empty() {
         return;
     }
-    net.backward_input_columns(ws, picked, sub);
     let n_in = ws.input().nrows();
     let act_dim = dl_da.len() / ws.batch();
     let input_grad = sub.input_grad().as_slice().chunks_exact(n_in);

@@ -3,6 +3,7 @@
 
 mod gradients;
 mod target;
+mod threads;
 mod torch_reference;
 
 use super::{HumanCriticConfig, Sac, SacConfig};
