@@ -12,8 +12,8 @@ pub struct ComputeArgs {
     /// before the fast kernels, the same on every machine).
     #[arg(long, global = true, env = "DUALREP_KERNELS", default_value = "auto")]
     pub kernels: KernelChoice,
-    /// Threads one learner may use: its twin critics side by side, the actor's products split
-    /// [default: the cores, at most 2; `reproduce` gives
+    /// Threads one learner may use (on two, its twin critics side by side; else its products
+    /// split) [default: the cores, at most 2; `reproduce` gives
     /// each run the cores divided by --jobs; `serve` divides them between running sessions].
     #[arg(long, global = true, env = "DUALREP_THREADS", value_parser = clap::value_parser!(u64).range(1..=256))]
     pub threads: Option<u64>,

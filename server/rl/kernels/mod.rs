@@ -28,8 +28,8 @@
 //! whole output elements, so results do not depend on the number of threads. The number is
 //! [`threads_now`]: the process maximum ([`set_max_threads`], default 1), shared out between
 //! the learners that train at once ([`ActiveLearner`]), or a per-thread choice
-//! ([`with_threads`]). Independent networks (the twin critics) can instead run side by side,
-//! one thread each ([`side_by_side`]).
+//! ([`with_threads`]). On two threads, independent networks (the twin critics) run side by
+//! side instead, one thread each ([`side_by_side`]).
 
 mod dense;
 #[cfg(test)]

@@ -10,14 +10,17 @@ use std::sync::Mutex;
 
 use super::{current_path, threads_now, with_path, with_threads};
 
-/// Run `a` and `b`: at once when this thread may use two threads or more ([`threads_now`]),
-/// each on one thread with this thread's kernel path, else `a` then `b` here. Allocates
+/// Run `a` and `b`: at once when this thread may use exactly two threads ([`threads_now`]),
+/// each on one thread with this thread's kernel path, else `a` then `b` here, their products
+/// split over this thread's threads as usual. With more than two a side would need a team of
+/// its own inside the running one, so more threads keep splitting each product, as before
+/// (a machine with many cores per run, such as `reproduce` with few jobs on 16 cores). Allocates
 /// nothing once this thread's team has its helper (the first time).
 pub fn side_by_side<A: Send, B: Send>(
     a: impl FnOnce() -> A + Send,
     b: impl FnOnce() -> B + Send,
 ) -> (A, B) {
-    if threads_now() < 2 {
+    if threads_now() != 2 {
         return (a(), b());
     }
     let path = current_path();
@@ -52,18 +55,19 @@ mod tests {
     use super::*;
 
     #[test]
-    fn both_sides_run_once_with_the_callers_path_on_one_thread_each() {
+    fn two_threads_run_the_sides_at_once_with_the_callers_path_one_thread_each() {
         for threads in [1, 2, 3] {
             with_threads(threads, || {
                 let path = current_path();
                 let side = || (current_path(), threads_now(), std::thread::current().id());
                 let (a, b) = side_by_side(side, side);
                 assert_eq!((a.0, b.0), (path, path), "{threads} threads");
-                if threads >= 2 {
-                    assert_eq!((a.1, b.1), (1, 1), "{threads} threads");
-                    assert_ne!(a.2, b.2, "{threads} threads: two threads");
+                if threads == 2 {
+                    assert_eq!((a.1, b.1), (1, 1), "two threads: one each");
+                    assert_ne!(a.2, b.2, "two threads: side by side");
                 } else {
-                    assert_eq!(a.2, b.2, "one thread: one after the other");
+                    assert_eq!((a.1, b.1), (threads, threads), "{threads}: products split");
+                    assert_eq!(a.2, b.2, "{threads} threads: one after the other");
                 }
                 assert_eq!(threads_now(), threads, "restored");
             });

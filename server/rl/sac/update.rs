@@ -14,9 +14,9 @@
 //! Each loss is a method that writes its gradient and returns its value, so the tests can
 //! check each gradient by finite differences; [`Sac::gradient_step`] strings them together.
 //!
-//! On two threads or more the twins of each pair (Q1 and Q2, H1 and H2, the two targets) make
-//! their passes side by side, one thread each (`kernels::side_by_side`), instead of splitting
-//! every product between the threads; the results are the same bits as one after the other.
+//! On two threads the twins of each pair (Q1 and Q2, H1 and H2, the two targets) make their
+//! passes side by side, one thread each (`kernels::side_by_side`), instead of splitting every
+//! product between the threads; the results are the same bits as one after the other.
 
 use crate::rl::kernels::side_by_side;
 use crate::rl::mse_loss;
