@@ -23,7 +23,7 @@ use crate::rl::mse_loss;
 use crate::rl::squashed_gaussian;
 use crate::rl::{Mlp, MlpWorkspace};
 
-use super::buffers::fill_critic_input;
+use super::buffers::{TwinPicks, fill_critic_input};
 use super::config::ActorMix;
 use super::{HumanCritic, Sac, UpdateStats};
 
@@ -261,27 +261,23 @@ impl Sac {
 
         // dL/d a_pi: the sum over the frozen critics of their input gradient's action rows,
         // each through the samples whose min picked it (the rest of its gradient is zero).
-        // The twins pass back side by side; their action rows are added in a fixed order
-        // (q1, q2, h1, h2), so the sums do not depend on which finished first.
+        // Added in a fixed order (q1, q2, h1, h2).
         b.dl_da.fill(0.0);
-        let [sub_1, sub_2] = &mut b.picked_ws;
-        let (picks_q, dl_da) = (&b.picks_q, &mut b.dl_da);
-        let (q1_ws, q2_ws) = (&mut b.q1_ws, &mut b.q2_ws);
-        let (q1_picked, q2_picked) = (picks_q.head(0), picks_q.head(1));
-        side_by_side(
-            || pass_back_picked(&self.q1, q1_ws, q1_picked, sub_1),
-            || pass_back_picked(&self.q2, q2_ws, q2_picked, sub_2),
+        add_twins_action_grad(
+            [&self.q1, &self.q2],
+            [&mut b.q1_ws, &mut b.q2_ws],
+            &b.picks_q,
+            &mut b.picked_ws,
+            &mut b.dl_da,
         );
-        add_picked_action_grad(q1_ws, q1_picked, sub_1, dl_da);
-        add_picked_action_grad(q2_ws, q2_picked, sub_2, dl_da);
         if let Some((hc, h1_ws, h2_ws, _)) = human {
-            let (h1_picked, h2_picked) = (b.picks_h.head(0), b.picks_h.head(1));
-            side_by_side(
-                || pass_back_picked(&hc.h1, h1_ws, h1_picked, sub_1),
-                || pass_back_picked(&hc.h2, h2_ws, h2_picked, sub_2),
+            add_twins_action_grad(
+                [&hc.h1, &hc.h2],
+                [h1_ws, h2_ws],
+                &b.picks_h,
+                &mut b.picked_ws,
+                &mut b.dl_da,
             );
-            add_picked_action_grad(h1_ws, h1_picked, sub_1, dl_da);
-            add_picked_action_grad(h2_ws, h2_picked, sub_2, dl_da);
         }
 
         // Through tanh and the Gaussian to [mu; log_std]; dL/d log_pi = ent_coef / n.
@@ -383,6 +379,25 @@ fn masked_mse_loss(prediction: &[f32], target: &[f32], mask: &[f32], grad: &mut 
         }
     }
     (sum / n as f64) as f32
+}
+
+/// `dl_da += ` the action rows of a twin pair's input gradients through the samples each head
+/// picked: the twins pass back side by side, then add in order (first, second), so the sums
+/// do not depend on which finished first.
+fn add_twins_action_grad(
+    [first, second]: [&Mlp; 2],
+    [first_ws, second_ws]: [&mut MlpWorkspace; 2],
+    picks: &TwinPicks,
+    [first_sub, second_sub]: &mut [MlpWorkspace; 2],
+    dl_da: &mut [f32],
+) {
+    let (first_picked, second_picked) = (picks.head(0), picks.head(1));
+    side_by_side(
+        || pass_back_picked(first, first_ws, first_picked, first_sub),
+        || pass_back_picked(second, second_ws, second_picked, second_sub),
+    );
+    add_picked_action_grad(first_ws, first_picked, first_sub, dl_da);
+    add_picked_action_grad(second_ws, second_picked, second_sub, dl_da);
 }
 
 /// A frozen critic's input gradient at the samples `picked` only (after its forward pass, with
