@@ -1,6 +1,8 @@
 //! GFLOP/s of each product of Lunar Lander's critic layers at batch 512 on one thread, with
 //! operands cycled through 8 copies (so that they come from as far as in an update), and the
-//! one-thread FMA peak: a quick loop for tuning the kernels without building the service.
+//! one-thread FMA peak: a quick loop for tuning the kernels without building the service. Then
+//! the forward product on squares (256, 1024, 2048 cubed), to set beside a vendor sgemm's rate
+//! on large shapes (`benches/reference/blas_products.py`).
 //!     cargo run --release -p dualrep-kernels --example layer_rates [avx512|avx2] [seconds]
 use std::time::{Duration, Instant};
 
@@ -37,18 +39,7 @@ fn main() {
         let mut db = fill(n_out, 7);
         let mut dx = fill(n_in * batch, 8);
         let flop = 2.0 * (n_in * n_out * batch) as f64;
-        let time = |f: &mut dyn FnMut(usize)| {
-            // The median of single calls: robust to the other processes of a shared machine.
-            let start = Instant::now();
-            let mut times = Vec::new();
-            while start.elapsed().as_secs_f64() < seconds {
-                let t = Instant::now();
-                f(times.len() % copies);
-                times.push(t.elapsed().as_secs_f64());
-            }
-            times.sort_by(f64::total_cmp);
-            times[times.len() / 2]
-        };
+        let time = |f: &mut dyn FnMut(usize)| median_seconds(seconds, &mut |i| f(i % copies));
         let t_f = time(&mut |c| {
             forward(
                 isa,
@@ -98,4 +89,30 @@ fn main() {
         );
     }
     println!("sum of the nine: {:.1} us", total_s * 1e6);
+    let rates: Vec<String> = [256, 1024, 2048]
+        .iter()
+        .map(|&n| {
+            let (w, b, x) = (vec![0.01f32; n * n], vec![0.0f32; n], vec![0.02f32; n * n]);
+            let mut z = vec![0.0f32; n * n];
+            let t = median_seconds(seconds, &mut |_| {
+                forward(isa, 1, (n, n, n), &w, &b, &x, &mut z, false)
+            });
+            format!("{n}^3 {:.0}", 2.0 * (n * n * n) as f64 / t / 1e9)
+        })
+        .collect();
+    println!("square forward products (GFLOP/s): {}", rates.join(", "));
+}
+
+/// The median of single calls of `f(call index)` over `seconds`: robust to the other processes
+/// of a shared machine.
+fn median_seconds(seconds: f64, f: &mut dyn FnMut(usize)) -> f64 {
+    let start = Instant::now();
+    let mut times = Vec::new();
+    while start.elapsed().as_secs_f64() < seconds || times.len() < 3 {
+        let t = Instant::now();
+        f(times.len());
+        times.push(t.elapsed().as_secs_f64());
+    }
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
 }
