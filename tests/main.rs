@@ -1,7 +1,8 @@
 //! Every integration test in one binary. Each test binary links the whole Rerun SDK (hundreds
 //! of megabytes and most of a test build's link time), so the suite links it once. The
 //! no-allocation tests share the binary: the counting allocator below keeps its counters per
-//! thread, so the tests running beside them do not disturb their counts.
+//! thread, so the tests running beside them do not disturb their counts (one that must count
+//! helper threads too re-runs this binary for itself alone: `sac_no_alloc.rs`).
 //!
 //! Select a group by its module name: `cargo test --test suite browser::`.
 

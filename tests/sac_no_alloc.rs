@@ -2,6 +2,11 @@
 //! counters), the only allocations during updates are, on the portable kernel path,
 //! matrixmultiply's packing buffers, one per matrix product, all freed again, and on the
 //! fast paths none at all, on one thread or two (see `rl_no_alloc.rs` for the same on bare MLPs).
+//! The per-thread counters do not see a helper thread (on two threads one twin of each pair
+//! runs on one), so the fast paths are also counted over the whole process, in a child process
+//! that runs that one test alone.
+
+use std::process::Command;
 
 use dualrep::rl::kernels::{self, KernelPath};
 use dualrep::rl::replay::{ReplayBuffer, Transition};
@@ -10,7 +15,10 @@ use dualrep::sim::Task;
 
 use crate::support::counting_alloc;
 
-use counting_alloc::count;
+use counting_alloc::{count, count_all_threads};
+
+/// Set in the child process that [`fast_paths_allocate_nothing_on_any_thread`] starts.
+const ALONE: &str = "DUALREP_TEST_ALONE_IN_PROCESS";
 
 /// Matrix products of one gradient step with `layers` linear layers per network, fewest and
 /// most: forward passes `layers` each, a backward pass with parameter gradients
@@ -44,13 +52,58 @@ fn updates_allocate_only_sgemm_packing_buffers() {
         };
         for &threads in threads {
             kernels::with_path(path, || {
-                kernels::with_threads(threads, || allocations_of_updates(path));
+                kernels::with_threads(threads, || allocations_of_updates(path, |f| count(f)));
             });
         }
     }
 }
 
-fn allocations_of_updates(path: KernelPath) {
+/// The fast paths on one thread and two, counting every thread's allocations: this test binary
+/// again, running only [`fast_paths_counted_over_the_process`], so that no other test's threads
+/// add to the count.
+#[test]
+fn fast_paths_allocate_nothing_on_any_thread() {
+    let out = Command::new(std::env::current_exe().unwrap())
+        .args([
+            "--exact",
+            "sac_no_alloc::fast_paths_counted_over_the_process",
+            "--ignored",
+            "--test-threads",
+            "1",
+            "--nocapture",
+        ])
+        .env(ALONE, "1")
+        .output()
+        .unwrap();
+    let text =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "child failed:\n{text}");
+    assert!(text.contains("1 passed"), "the child ran no test:\n{text}");
+}
+
+#[test]
+#[ignore = "run alone in a child process by fast_paths_allocate_nothing_on_any_thread"]
+fn fast_paths_counted_over_the_process() {
+    assert!(
+        std::env::var_os(ALONE).is_some(),
+        "counts every thread of the process: run by fast_paths_allocate_nothing_on_any_thread"
+    );
+    for path in KernelPath::ALL.into_iter().filter(|p| p.is_available()) {
+        if path == KernelPath::Portable {
+            continue;
+        }
+        for threads in [1, 2] {
+            kernels::with_path(path, || {
+                kernels::with_threads(threads, || {
+                    allocations_of_updates(path, |f| count_all_threads(f))
+                });
+            });
+        }
+    }
+}
+
+/// Checks the allocations `count` sees during two updates, after a first.
+fn allocations_of_updates(path: KernelPath, count: impl Fn(&mut dyn FnMut()) -> (usize, isize)) {
     for human in [false, true] {
         let mut config = SacConfig::for_task(Task::Reaching);
         config.hidden = vec![16, 8];
@@ -74,7 +127,7 @@ fn allocations_of_updates(path: KernelPath) {
             });
         }
         sac.update(&replay).unwrap(); // first use
-        let (allocations, live) = count(|| {
+        let (allocations, live) = count(&mut || {
             sac.update(&replay).unwrap();
             sac.update(&replay).unwrap();
         });
