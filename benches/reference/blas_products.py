@@ -10,7 +10,7 @@ Each product of one critic layer (`n_in:n_out`, batch 512) in nn.Linear's layout
 `layer_rates`: the median of single calls, the operands cycled through 8 copies. Prints one
 line per layer with microseconds and GFLOP/s (2 n_in n_out batch flops per product); divide by
 the FMA peak `layer_rates` prints in the same round for a fraction of it. Then MKL on square
-products (256, 1024, 2048 cubed): how near the peak a vendor's sgemm gets on large shapes.
+products (64 to 2048 cubed): how near the peak a vendor's sgemm gets on large shapes.
 """
 
 from __future__ import annotations
@@ -104,7 +104,7 @@ def main() -> None:
             f"{name} {t * 1e6:7.1f} us {flop / t / 1e9:5.0f} GFLOP/s" for name, t in times.items()
         )
         print(f"{n_in:>4}:{n_out:<4} {cells}")
-    sizes = (256, 1024, 2048)
+    sizes = (64, 128, 256, 1024, 2048)
     rates = ", ".join(f"{n}^3 {square(n, args.seconds):.0f}" for n in sizes)
     print(f"mkl square products (GFLOP/s): {rates}")
 

@@ -1,7 +1,7 @@
 //! GFLOP/s of each product of Lunar Lander's critic layers at batch 512 on one thread, with
 //! operands cycled through 8 copies (so that they come from as far as in an update), and the
 //! one-thread FMA peak: a quick loop for tuning the kernels without building the service. Then
-//! the forward product on squares (256, 1024, 2048 cubed), to set beside a vendor sgemm's rate
+//! the forward product on squares (64 to 2048 cubed), to set beside a vendor sgemm's rate
 //! on large shapes (`benches/reference/blas_products.py`).
 //!     cargo run --release -p dualrep-kernels --example layer_rates [avx512|avx2] [seconds]
 use std::time::{Duration, Instant};
@@ -89,7 +89,7 @@ fn main() {
         );
     }
     println!("sum of the nine: {:.1} us", total_s * 1e6);
-    let rates: Vec<String> = [256, 1024, 2048]
+    let rates: Vec<String> = [64, 128, 256, 1024, 2048]
         .iter()
         .map(|&n| {
             let (w, b, x) = (vec![0.01f32; n * n], vec![0.0f32; n], vec![0.02f32; n * n]);
@@ -100,7 +100,7 @@ fn main() {
             format!("{n}^3 {:.0}", 2.0 * (n * n * n) as f64 / t / 1e9)
         })
         .collect();
-    println!("square forward products (GFLOP/s): {}", rates.join(", "));
+    println!("square forward products, GFLOP/s: {}", rates.join(", "));
 }
 
 /// The median of single calls of `f(call index)` over `seconds`: robust to the other processes
