@@ -1,9 +1,9 @@
 //! The core's clock right after different kinds of work, read from a chain of dependent integer
 //! multiplications (three cycles each on every recent x86 core, whatever the vector width or
 //! the power state; a chain of additions of a constant is not used, since newer Intel cores
-//! fold those at renaming and run several per cycle): is a matrix product held to a lower clock than the FMA loop whose rate
-//! `bench sac` calls the peak? The VM exposes no cycle counters, so this is the only clock
-//! it can read.
+//! fold those at renaming and run several per cycle): is a matrix product held to a lower
+//! clock than the FMA loop whose rate `bench sac` calls the peak? The VM exposes no cycle
+//! counters, so this is the only clock it can read.
 //!     cargo run --release -p dualrep-kernels --example clock_probe [rounds]
 use std::time::{Duration, Instant};
 
@@ -24,13 +24,14 @@ fn chain_ghz() -> f64 {
         let (mut x, mut n) = (3u64, TURNS);
         std::arch::asm!(
             "2:",
-            ".rept 100",
+            ".rept {chain}",
             "imul {x}, {x}",
             ".endr",
             "dec {n}",
             "jnz 2b",
             x = inout(reg) x,
             n = inout(reg) n,
+            chain = const CHAIN,
             options(nomem, nostack),
         );
         std::hint::black_box((x, n));

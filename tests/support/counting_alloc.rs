@@ -56,8 +56,8 @@ pub fn count(f: impl FnOnce()) -> (usize, isize) {
 
 /// (allocations, net bytes still live) made by every thread of the process while `f` runs:
 /// only meaningful when nothing else runs in the process (a test re-run alone in a child
-/// process, see `sac_no_alloc.rs`). Acquire/release around `f` so that its helpers' counts,
-/// made before they hand their work back, are seen.
+/// process, see `sac_no_alloc.rs`). A helper's counts are seen because it hands its work back
+/// to `f`'s thread with release/acquire (the kernels' team) before `f` returns.
 pub fn count_all_threads(f: impl FnOnce()) -> (usize, isize) {
     let (n0, b0) = (
         ALL_ALLOCATIONS.load(Ordering::Acquire),
