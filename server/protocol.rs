@@ -111,6 +111,48 @@ pub struct ProgressMessage {
     /// Posterior alignment with the synthetic trainer's reward (synthetic preference sessions).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub alignment: Option<f64>,
+    /// How the query rule paces itself (evaluative sessions, from their first finished episode).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pacing: Option<RulePacing>,
+}
+
+/// A query rule's pacing as a person feels it (docs/dref.md): floods of consecutive queries,
+/// and silences while the robot keeps failing ("frozen").
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct RulePacing {
+    /// Finished episodes.
+    pub episodes: u64,
+    /// Episodes after which the rule had not asked for 10k steps while the last 10 episodes
+    /// failed.
+    pub frozen_episodes: u64,
+    /// The longest stretch of consecutive asked steps.
+    pub longest_flood: u64,
+    /// Steps since the rule last asked, at the latest episode's end.
+    pub steps_since_query: u64,
+    /// Whether each of the latest episodes (at most 10) succeeded, oldest first.
+    #[serde(skip)]
+    recent_successes: std::collections::VecDeque<bool>,
+}
+
+impl RulePacing {
+    /// Count a finished episode.
+    pub fn episode(&mut self, e: &crate::guidance::evaluative_run::EpisodeRecord) {
+        use crate::guidance::evaluative_run::{FROZEN_AFTER_STEPS, FROZEN_FAILED_EPISODES};
+        self.episodes += 1;
+        self.longest_flood = e.longest_flood;
+        self.steps_since_query = e.steps_since_query;
+        let recent = &mut self.recent_successes;
+        recent.push_back(e.outcome == crate::sim::Outcome::Success);
+        if recent.len() > FROZEN_FAILED_EPISODES {
+            recent.pop_front();
+        }
+        if recent.len() == FROZEN_FAILED_EPISODES
+            && recent.iter().all(|s| !s)
+            && e.steps_since_query >= FROZEN_AFTER_STEPS
+        {
+            self.frozen_episodes += 1;
+        }
+    }
 }
 
 /// Trainer to server.

@@ -17,7 +17,9 @@ use serde::{Deserialize, Deserializer, Serialize};
 use crate::guidance::drpl::acquisition::Acquisition;
 use crate::guidance::drpl::run::PreferenceRunConfig;
 use crate::guidance::drpl::selection::QueryMethod;
-use crate::guidance::evaluative_run::EvaluativeRunConfig;
+use crate::guidance::evaluative_run::{
+    DEFAULT_CEILING, EvaluativeRunConfig, GraphAtEpisodeEnd, TimeLimitEnd,
+};
 use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::guidance::query_rule::UcbForm;
 use crate::rl::ActorMix;
@@ -25,10 +27,12 @@ use crate::rl::kernels::KernelPath;
 use crate::scene_graph::SceneGraph;
 use crate::sim::{GripObservation, PlacingSuccess, Start, Task, Variant};
 
+mod as_run;
 mod people;
 mod run_configs;
 
 pub use crate::session::combine::Combine;
+pub use as_run::{Profile, SceneGraphChoice};
 pub use people::{NeverWord, RationalWord, TeacherBeta, TeacherSkip};
 
 /// A human session's control rate when the researcher does not set `pace_hz`: the robot's own.
@@ -176,6 +180,17 @@ pub struct Settings {
     /// The UCB form: `authors` or `paper`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ucb: Option<UcbForm>,
+    /// Rank the current state among those visited in the last N steps; 0: among every state
+    /// with feedback, the authors' [default 1000 for `dref`, 0 for `dref-authors`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rank_window: Option<usize>,
+    /// Ask on at most this share of steps, in (0, 1]; 0: no ceiling, the authors' [default 0.05
+    /// for `dref`, 0 for `dref-authors`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_feedback_rate: Option<f64>,
+    /// With a ceiling: at most about this many queries in a row [default 20].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub feedback_burst: Option<u32>,
     /// The learner stores `reward_scale * r`; reported returns keep the env's scale.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reward_scale: Option<f32>,
@@ -184,10 +199,32 @@ pub struct Settings {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_queries_per_minute: Option<u32>,
 
+    // ---- the authors' published runs (issue 33, `settings/as_run.rs`) --------------------
+    /// `head` (the authors' repository at its head, algorithms.md) or `as-run` (what their
+    /// published runs ran, per task; the settings below, given, override it) [default head].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub profile: Option<Profile>,
+    /// The synthetic oracle's alpha at step 0 (it grows 1e-8 a step) [default 0.999].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub oracle_alpha0: Option<f64>,
+    /// Factor on both actions the oracle's critic and H_hat are shown [default 1].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub oracle_action_scale: Option<f32>,
+    /// Which observation the scene graph reads on an episode's last step: `step` or `reset`
+    /// [default step].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub graph_at_episode_end: Option<GraphAtEpisodeEnd>,
+    /// How a time limit's end is stored: `truncation` or `terminal` [default truncation].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_limit: Option<TimeLimitEnd>,
+
     // ---- the scene graph -----------------------------------------------------------------
     /// Lunar Lander: test both side engines on a0, as the authors' code does.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub side_engines_on_a0: Option<bool>,
+    /// Placing: `head` (36 cells) or `as-run` (the published runs' 12 cells).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scene_graph: Option<SceneGraphChoice>,
 
     // ---- the task's version (tasks.md; Reaching and Placing) -----------------------------
     /// `authors` (home pose, 1.2 cm steps, gradual gripper) or `uniform` (the first version).
@@ -449,8 +486,21 @@ impl Settings {
                     c: Some(c.query_rule.c),
                     k: Some(c.query_rule.k),
                     ucb: Some(c.query_rule.form),
+                    rank_window: Some(c.query_rule.rank_window),
+                    max_feedback_rate: Some(c.query_rule.ceiling.map_or(0.0, |x| x.rate)),
+                    feedback_burst: Some(
+                        c.query_rule
+                            .ceiling
+                            .map_or(DEFAULT_CEILING.burst, |x| x.burst),
+                    ),
                     reward_scale: Some(c.reward_scale),
                     max_queries_per_minute: Some(0),
+                    profile: Some(Profile::Head),
+                    oracle_alpha0: Some(c.oracle.alpha0),
+                    oracle_action_scale: Some(c.oracle.action_scale),
+                    graph_at_episode_end: Some(c.graph_at_episode_end),
+                    time_limit: Some(c.time_limit),
+                    scene_graph: placing.then_some(SceneGraphChoice::Head),
                     side_engines_on_a0,
                     variant: table_top.then_some(c.env.variant),
                     start: table_top.then(|| c.env.start_pose()),

@@ -113,7 +113,13 @@ fn reproduce_runs_the_grid_then_ef_at_drefs_measured_rate_then_reports() {
     let table = fs::read_to_string(g.out.join("table.md")).unwrap();
     assert!(table.contains("| EF-6% (DREF's rate) |"), "{table}");
     assert!(
-        table.contains("| DREF | 41 ± 1 | 6.0 ± 1.0 % | 2 | – | 1.00 | 11.4k (1.6 %) |"),
+        table.contains(
+            "| DREF | 41 ± 1 | 6.0 ± 1.0 % | 2 | 0 | 0.0 ± 0.0 % | >= 0 | – | 1.00 | 11.4k (1.6 %) |"
+        ),
+        "{table}"
+    );
+    assert!(
+        table.contains("DREF above EF-6% (its rate): one-sided exact Mann-Whitney U ="),
         "{table}"
     );
     let svg = fs::read_to_string(g.out.join("fig3.svg")).unwrap();

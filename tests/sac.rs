@@ -58,7 +58,7 @@ fn per_task_table() {
 /// A run's SAC settings by name, as `--set` and a launch's `params` give them.
 fn sac_with(pairs: &[(&str, &str)]) -> Result<SacConfig, String> {
     Settings::from_pairs(pairs.iter().copied())?
-        .evaluative(Task::LunarLander, EvaluativeMethod::Dref, 0)
+        .evaluative(Task::LunarLander, EvaluativeMethod::DrefAuthors, 0)
         .map(|c| c.sac)
 }
 

@@ -156,6 +156,8 @@ async fn status_episodes_checkpoints_and_recovery(pool: SqlitePool) {
         feedback_fraction: 0.1,
         outcome: Outcome::Success,
         states_with_feedback: 3,
+        steps_since_query: 2,
+        longest_flood: 4,
     };
     store.insert_episode("s1", &e).await.unwrap();
     store.insert_episode("s1", &e).await.unwrap();

@@ -65,6 +65,8 @@ fn an_expert_trains_and_drives_dref_and_ef_runs() {
             "wall_seconds",
             "updates_per_second",
             "threads",
+            "longest_flood",
+            "longest_flood_after_2k",
         ] {
             assert!(!written[field].is_null(), "{method}: {field} missing");
         }
@@ -85,14 +87,14 @@ fn an_expert_trains_and_drives_dref_and_ef_runs() {
             lines.next(),
             Some(
                 "step,episode,return,length,outcome,cumulative_return,feedback_count,\
-                 feedback_fraction,states_with_feedback"
+                 feedback_fraction,states_with_feedback,steps_since_query,longest_flood"
             )
         );
         let mut last_cumulative = 0.0;
         let mut last_step = 0.0;
         for line in lines {
             let cols: Vec<&str> = line.split(',').collect();
-            assert_eq!(cols.len(), 9, "{line}");
+            assert_eq!(cols.len(), 11, "{line}");
             assert!(
                 ["success", "failure", "time_limit"].contains(&cols[4]),
                 "outcome {line}"
@@ -101,6 +103,11 @@ fn an_expert_trains_and_drives_dref_and_ef_runs() {
             // Only DREF ranks abstract states; it has had feedback in at least one by its
             // first episode's end (it asks at its first step).
             assert_eq!(num(8) > 0.0, method == "dref", "{method}: {line}");
+            // The rule's pacing: a silence no longer than the run, a flood no longer than the
+            // steps so far, and none for plain SAC (which never asks).
+            assert!(num(9) <= num(0), "steps since a query {line}");
+            assert!(num(10) <= num(0), "flood {line}");
+            assert_eq!(num(10) == 0.0, method == "sac", "{method}: {line}");
             // The length is the steps since the previous episode ended.
             assert_eq!(num(3), num(0) - last_step, "length {line}");
             assert_eq!(num(2) == 100.0, cols[4] == "success", "{line}");

@@ -103,35 +103,42 @@ pub fn run(args: ReproduceArgs, compute: &super::compute::Compute) -> anyhow::Re
         compute.path
     ));
     let mut runs = config.initial_runs();
-    if config.wants_matched() && !config.has_dref() {
+    let matched_rows = config.matched_rows();
+    for &(_, dref) in &matched_rows {
+        if config.has(dref) {
+            continue;
+        }
         for &task in &config.tasks {
             let rate = paper_dref_rate(task);
             progress.line(&format!(
-                "{task}: DREF is not in the grid; EF at DREF's rate runs at the paper's {rate} %"
+                "{task}: {dref} is not in the grid; EF at its rate runs at the paper's {rate} %"
             ));
             runs.extend(config.matched_runs(task, rate));
         }
     }
-    let mut dref_ended: HashMap<Task, u64> = HashMap::new();
+    let mut dref_ended: HashMap<(Task, &str), u64> = HashMap::new();
     let follow_up = |outcome: &Outcome| -> Vec<RunSpec> {
-        if !config.wants_matched() || outcome.spec.method != "dref" {
+        let Some(&(_, dref)) = matched_rows
+            .iter()
+            .find(|(_, dref)| outcome.spec.method == *dref)
+        else {
             return Vec::new();
-        }
+        };
         let task = outcome.spec.task;
-        let ended = dref_ended.entry(task).or_default();
+        let ended = dref_ended.entry((task, dref)).or_default();
         *ended += 1;
         if *ended < config.seeds {
             return Vec::new();
         }
-        let rate = measured_dref_rate(&config, task).unwrap_or_else(|| {
+        let rate = measured_dref_rate(&config, task, dref).unwrap_or_else(|| {
             let rate = paper_dref_rate(task);
             progress.line(&format!(
-                "{task}: no DREF run finished; EF at DREF's rate runs at the paper's {rate} %"
+                "{task}: no {dref} run finished; EF at its rate runs at the paper's {rate} %"
             ));
             rate
         });
         progress.line(&format!(
-            "{task}: DREF asked on {rate:.2} % of steps; queuing EF at that rate"
+            "{task}: {dref} asked on {rate:.2} % of steps; queuing EF at that rate"
         ));
         config.matched_runs(task, rate)
     };
@@ -190,7 +197,7 @@ fn report_submitted(
     config: &GridConfig,
     outcomes: &[Outcome],
     in_flight: usize,
-    dref_ended: &HashMap<Task, u64>,
+    dref_ended: &HashMap<(Task, &str), u64>,
 ) -> anyhow::Result<()> {
     let finished = outcomes
         .iter()
@@ -200,17 +207,20 @@ fn report_submitted(
         "{} runs: {in_flight} in the Slurm queue, {finished} already finished",
         config.total_runs()
     );
-    if config.wants_matched() && config.has_dref() {
+    for (_, dref) in config.matched_rows() {
+        if !config.has(dref) {
+            continue;
+        }
         let later: Vec<&str> = config
             .tasks
             .iter()
-            .filter(|t| dref_ended.get(t).copied().unwrap_or(0) < config.seeds)
+            .filter(|&&t| dref_ended.get(&(t, dref)).copied().unwrap_or(0) < config.seeds)
             .map(|t| t.id())
             .collect();
         if !later.is_empty() {
             println!(
-                "EF at DREF's rate on {} is submitted by a later run of this command, once \
-                 DREF's runs there have finished",
+                "EF at {dref}'s rate on {} is submitted by a later run of this command, once \
+                 {dref}'s runs there have finished",
                 later.join(", ")
             );
         }
@@ -273,11 +283,11 @@ pub(super) fn dedup_keep_order<T: PartialEq + Clone>(items: &mut Vec<T>) {
     });
 }
 
-/// DREF's mean feedback percentage over its finished seeds on `task`, read from their
-/// summaries; `None` when none finished (or none could be read).
-fn measured_dref_rate(config: &GridConfig, task: Task) -> Option<f64> {
+/// The DREF row `dref`'s mean feedback percentage over its finished seeds on `task`, read from
+/// their summaries; `None` when none finished (or none could be read).
+fn measured_dref_rate(config: &GridConfig, task: Task, dref: &str) -> Option<f64> {
     let rates: Vec<f64> = (0..config.seeds)
-        .map(|seed| run_dir(&config.out, task, "dref", seed))
+        .map(|seed| run_dir(&config.out, task, dref, seed))
         .filter(|dir| is_finished(dir))
         .filter_map(|dir| read_train_summary(&dir).ok())
         .map(|s| 100.0 * s.feedback_fraction)

@@ -166,6 +166,9 @@ pub struct TrainSummary {
     pub feedback_fraction: f64,
     /// Queries the method wanted that a person's pace (`max_queries_per_minute`) held back.
     pub queries_held_back: u64,
+    /// The longest stretch of consecutive asked steps, over the run and from step 2,000 on.
+    pub longest_flood: u64,
+    pub longest_flood_after_2k: u64,
     /// Mean return of the last 10 finished episodes.
     pub final_mean_return: f64,
     /// Success rate of the last 10 finished episodes.
@@ -254,7 +257,7 @@ pub fn drive(
         writeln!(
             csv,
             "step,episode,return,length,outcome,cumulative_return,feedback_count,feedback_fraction,\
-             states_with_feedback"
+             states_with_feedback,steps_since_query,longest_flood"
         )?;
     }
     let mut episodes = Vec::new();
@@ -266,7 +269,7 @@ pub fn drive(
         if let Some(e) = report.episode {
             writeln!(
                 csv,
-                "{},{},{},{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{},{},{},{},{}",
                 e.step,
                 e.episode,
                 e.episode_return,
@@ -275,7 +278,9 @@ pub fn drive(
                 e.cumulative_return,
                 e.feedback_count,
                 e.feedback_fraction,
-                e.states_with_feedback
+                e.states_with_feedback,
+                e.steps_since_query,
+                e.longest_flood
             )?;
             csv.flush()?;
             if let Some(c) = checkpoints.as_deref_mut() {
@@ -329,11 +334,11 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
                 Some(env) => env.spec().action_space.dim(),
                 None => config.make_env().spec().action_space.dim(),
             };
-            Box::new(ExpertOracle::new(expert, act_dim, args.oracle).with_faults(
-                config.teacher,
-                config.seed,
-                f64::from(config.sac.gamma),
-            ))
+            Box::new(
+                ExpertOracle::new(expert, act_dim, args.oracle)
+                    .with_config(config.oracle)
+                    .with_faults(config.teacher, config.seed, f64::from(config.sac.gamma)),
+            )
         }
     };
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
@@ -411,6 +416,8 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
         feedback_count: run.feedback_count(),
         feedback_fraction: run.feedback_count() as f64 / run.steps() as f64,
         queries_held_back: run.queries_held_back(),
+        longest_flood: run.pacing().longest_flood,
+        longest_flood_after_2k: run.pacing().longest_flood_settled,
         final_mean_return,
         final_success_rate,
         wall_seconds,

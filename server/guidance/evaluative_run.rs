@@ -15,6 +15,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use super::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
+use super::expert_oracle::OracleConfig;
 use super::feedback_schedule::{EvaluativeMethod, FeedbackSchedule};
 use super::human_pace::HumanPace;
 use super::query_rule::{QueryRule, UcbForm};
@@ -24,15 +25,42 @@ use crate::rl::{HumanCriticConfig, Sac, SacConfig, UpdateStats};
 use crate::scene_graph::{AbstractState, SceneGraph};
 use crate::sim::{DeclaredTask, Env, EnvFault, EnvOptions, Outcome, RenderState, Task, TaskRef};
 
-/// DREF's query-rule constants (algorithms.md section 2, from the authors' configs).
+/// DREF's query-rule constants (algorithms.md section 2, from the authors' configs), and the
+/// product rule's two changes (`docs/dref.md`), both off in the authors' rule.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct QueryRuleConfig {
     pub c: f64,
     pub k: usize,
     pub form: UcbForm,
+    /// Rank among the states visited in the last `rank_window` steps; 0: among every state
+    /// that has had feedback (the authors'). Configs written before it existed read as 0.
+    #[serde(default)]
+    pub rank_window: usize,
+    /// A ceiling on the share of steps asked; `None`: none (the authors').
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ceiling: Option<FeedbackCeiling>,
 }
 
+/// At most `rate` of the steps asked in the long run, at most about `burst` in a row.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FeedbackCeiling {
+    pub rate: f64,
+    pub burst: u32,
+}
+
+/// The product DREF's window: about 1,000 steps is many Placing and Reaching episodes and one or
+/// two of Lunar Lander's, so the ranked states are those of the learner's current behaviour
+/// (docs/dref.md).
+pub const DEFAULT_RANK_WINDOW: usize = 1_000;
+/// The product DREF's ceiling: 5 % of the steps (the paper's DREF asked 1.6-8.4 %), at most 20
+/// queries in a row (one second of a human session at 20 Hz).
+pub const DEFAULT_CEILING: FeedbackCeiling = FeedbackCeiling {
+    rate: 0.05,
+    burst: 20,
+};
+
 impl QueryRuleConfig {
+    /// The authors' rule on `task` (algorithms.md section 2).
     pub fn for_task(task: Task) -> Self {
         let (c, k) = match task {
             Task::LunarLander => (0.2, 60),
@@ -43,7 +71,34 @@ impl QueryRuleConfig {
             c,
             k,
             form: UcbForm::Authors,
+            rank_window: 0,
+            ceiling: None,
         }
+    }
+
+    /// The rule `method` asks by on `task`: the product's for `dref`, the authors' otherwise.
+    pub fn for_method(task: Task, method: EvaluativeMethod) -> Self {
+        let authors = Self::for_task(task);
+        match method {
+            EvaluativeMethod::Dref => Self {
+                rank_window: DEFAULT_RANK_WINDOW,
+                ceiling: Some(DEFAULT_CEILING),
+                ..authors
+            },
+            _ => authors,
+        }
+    }
+
+    /// The running rule these constants describe.
+    pub fn build(&self) -> QueryRule {
+        let mut rule = QueryRule::new(self.c, self.k, self.form);
+        if self.rank_window > 0 {
+            rule = rule.ranked_among_recent(self.rank_window);
+        }
+        if let Some(ceiling) = self.ceiling {
+            rule = rule.with_ceiling(ceiling.rate, ceiling.burst);
+        }
+        rule
     }
 
     /// A task an env declared: Placing's constants (c 0.2, k 4), the authors' largest c with a
@@ -76,32 +131,89 @@ pub struct EvaluativeRunConfig {
     /// The synthetic teacher's faults (none: the paper's oracle).
     #[serde(default, skip_serializing_if = "TeacherFaults::is_perfect")]
     pub teacher: TeacherFaults,
+    /// The synthetic oracle's alpha start and the scale of the actions its critic is shown
+    /// (the authors' head: 0.999 and 1).
+    #[serde(default, skip_serializing_if = "OracleConfig::is_default")]
+    pub oracle: OracleConfig,
+    /// Which observation the scene graph reads on an episode's last step.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub graph_at_episode_end: GraphAtEpisodeEnd,
+    /// How a time limit's end is stored for the learner.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub time_limit: TimeLimitEnd,
+}
+
+fn is_default<T: Default + PartialEq>(value: &T) -> bool {
+    *value == T::default()
+}
+
+/// The observation the scene graph reads on an episode's last step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum GraphAtEpisodeEnd {
+    /// The episode's last observation s_{t+1} (the graph of what the robot did).
+    #[default]
+    Step,
+    /// The next episode's first observation, as the authors' runs had it: stable-baselines3's
+    /// vectorised env resets before it returns, so their `new_obs` at an episode's end was the
+    /// reset observation, and the graph (and so the query rule) read that.
+    Reset,
+}
+
+/// How an episode's end at the time limit is stored for the learner.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum TimeLimitEnd {
+    /// As a truncation: the bootstrap goes on through it (algorithms.md section 1).
+    #[default]
+    Truncation,
+    /// As a termination, as the authors' robosuite runs stored it (their wrapper set `done`
+    /// at the horizon and no `TimeLimit.truncated`), so the bootstrap stops there.
+    Terminal,
 }
 
 fn unit_scale() -> f32 {
     1.0
 }
 
+/// The human critic `method` learns with: none for plain SAC; the authors' (H regressed on every
+/// sampled step, the unasked ones as 0) for EF and the authors' DREF; regressed on answered
+/// steps only for the product's DREF, whose answers would otherwise be outnumbered by zeros
+/// 30 to 1 at a few percent of feedback (docs/dref.md).
+fn human_critic_for(method: EvaluativeMethod) -> Option<HumanCriticConfig> {
+    match method {
+        EvaluativeMethod::Sac => None,
+        EvaluativeMethod::Dref => Some(HumanCriticConfig {
+            mask: true,
+            ..HumanCriticConfig::default()
+        }),
+        EvaluativeMethod::Ef { .. } | EvaluativeMethod::DrefAuthors => {
+            Some(HumanCriticConfig::default())
+        }
+    }
+}
+
 impl EvaluativeRunConfig {
     /// The published defaults for `task` and `method`: plain SAC has no human critic, EF and
-    /// DREF have one with the authors' actor mix.
+    /// DREF have one with the authors' actor mix; the product's `dref` regresses it on answered
+    /// steps only and asks by its own rule (`docs/dref.md`).
     pub fn new(task: Task, method: EvaluativeMethod, seed: u64) -> Self {
         let mut sac = SacConfig::for_task(task);
-        sac.human_critic = match method {
-            EvaluativeMethod::Sac => None,
-            _ => Some(HumanCriticConfig::default()),
-        };
+        sac.human_critic = human_critic_for(method);
         Self {
             task: task.into(),
             method,
             seed,
             sac,
-            query_rule: QueryRuleConfig::for_task(task),
+            query_rule: QueryRuleConfig::for_method(task, method),
             scene_graph: SceneGraph::for_task(task),
             env: EnvOptions::default(),
             reward_scale: 1.0,
             human_pace: None,
             teacher: TeacherFaults::default(),
+            oracle: OracleConfig::default(),
+            graph_at_episode_end: GraphAtEpisodeEnd::Step,
+            time_limit: TimeLimitEnd::Truncation,
         }
     }
 
@@ -125,22 +237,30 @@ impl EvaluativeRunConfig {
             gradient_steps: 1,
             init_ent_coef: 1.0,
             target_entropy: None,
-            human_critic: match method {
-                EvaluativeMethod::Sac => None,
-                _ => Some(HumanCriticConfig::default()),
+            human_critic: human_critic_for(method),
+        };
+        let query_rule = match method {
+            EvaluativeMethod::Dref => QueryRuleConfig {
+                rank_window: DEFAULT_RANK_WINDOW,
+                ceiling: Some(DEFAULT_CEILING),
+                ..QueryRuleConfig::for_declared()
             },
+            _ => QueryRuleConfig::for_declared(),
         };
         Self {
             task: TaskRef::Declared(task),
             method,
             seed,
             sac,
-            query_rule: QueryRuleConfig::for_declared(),
+            query_rule,
             scene_graph: graph,
             env: EnvOptions::default(),
             reward_scale: 1.0,
             human_pace: None,
             teacher: TeacherFaults::default(),
+            oracle: OracleConfig::default(),
+            graph_at_episode_end: GraphAtEpisodeEnd::Step,
+            time_limit: TimeLimitEnd::Truncation,
         }
     }
 
@@ -178,6 +298,76 @@ pub struct EpisodeRecord {
     /// asks at every step); 0 for the other methods.
     #[serde(default)]
     pub states_with_feedback: u64,
+    /// Steps since the last query when the episode ended (all steps if none yet): with the last
+    /// 10 episodes failed, 10,000 or more marks the rule as frozen (docs/dref.md).
+    #[serde(default)]
+    pub steps_since_query: u64,
+    /// The longest stretch of consecutive asked steps so far (a flood).
+    #[serde(default)]
+    pub longest_flood: u64,
+}
+
+/// What a person sees of a rule's pacing: the longest stretches of consecutive asked steps
+/// ("floods") and when it last asked (a long silence while the learner fails is a "freeze").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct AskPacing {
+    /// The step of the last query, if any.
+    pub last_query: Option<u64>,
+    /// Consecutive asked steps up to now.
+    pub flood: u64,
+    /// The longest stretch of consecutive asked steps.
+    pub longest_flood: u64,
+    /// The longest stretch among the steps from [`AskPacing::SETTLED_AFTER`] on (a new
+    /// learner's first steps are all new states, so some flooding there is expected).
+    pub longest_flood_settled: u64,
+}
+
+impl AskPacing {
+    /// Steps after which a flood counts against the rule (the "after its first 2k").
+    pub const SETTLED_AFTER: u64 = 2_000;
+
+    /// Step `step` (0-based) asked or not.
+    pub fn step(&mut self, step: u64, asked: bool) {
+        if !asked {
+            self.flood = 0;
+            return;
+        }
+        self.last_query = Some(step);
+        self.flood += 1;
+        self.longest_flood = self.longest_flood.max(self.flood);
+        if step >= Self::SETTLED_AFTER {
+            let settled = self.flood.min(step + 1 - Self::SETTLED_AFTER);
+            self.longest_flood_settled = self.longest_flood_settled.max(settled);
+        }
+    }
+
+    /// Steps since the last query after `steps` steps.
+    pub fn steps_since_query(&self, steps: u64) -> u64 {
+        self.last_query.map_or(steps, |s| steps - 1 - s)
+    }
+}
+
+/// Steps without a query after which a rule whose learner keeps failing counts as frozen.
+pub const FROZEN_AFTER_STEPS: u64 = 10_000;
+/// Episodes that must all have failed for a silent rule to count as frozen.
+pub const FROZEN_FAILED_EPISODES: usize = 10;
+
+/// The share of episodes after which the rule had not asked for [`FROZEN_AFTER_STEPS`] while
+/// the last [`FROZEN_FAILED_EPISODES`] episodes all failed (the "frozen"), over the
+/// episodes in order, each as (steps since the last query at its end, whether it succeeded).
+pub fn frozen_share(episodes: &[(u64, bool)]) -> f64 {
+    if episodes.is_empty() {
+        return 0.0;
+    }
+    let frozen = (FROZEN_FAILED_EPISODES - 1..episodes.len())
+        .filter(|&i| {
+            episodes[i].0 >= FROZEN_AFTER_STEPS
+                && episodes[i + 1 - FROZEN_FAILED_EPISODES..=i]
+                    .iter()
+                    .all(|&(_, success)| !success)
+        })
+        .count();
+    frozen as f64 / episodes.len() as f64
 }
 
 /// What one call of [`EvaluativeRun::step`] did.
@@ -220,6 +410,11 @@ pub struct EvaluativeRun {
     /// Per query, in order: the step it judged and the replay slot of that transition, so an
     /// answer can be revised (a trainer's undo) after the run moved on.
     queried: Vec<(u64, usize)>,
+    /// Floods and silences of the rule.
+    pacing: AskPacing,
+    /// The next episode's first observation when the env was reset before the episode was
+    /// counted (`graph_at_episode_end = reset`); `None` between steps.
+    next_episode_obs: Option<Vec<f32>>,
 }
 
 impl EvaluativeRun {
@@ -244,9 +439,7 @@ impl EvaluativeRun {
         let learner = Sac::new(obs_dim, act_dim, config.sac.clone(), config.seed);
         let capacity = (config.sac.buffer_size as u64).min(steps.max(1)) as usize;
         let replay = ReplayBuffer::new(capacity, obs_dim, act_dim);
-        let q = config.query_rule;
-        let schedule =
-            FeedbackSchedule::new(config.method, QueryRule::new(q.c, q.k, q.form), config.seed);
+        let schedule = FeedbackSchedule::new(config.method, config.query_rule.build(), config.seed);
         let mut episode_seeds = ChaCha8Rng::seed_from_u64(config.seed ^ 0xe915_0de5_eed5_0000);
         let episode_seed = episode_seeds.random();
         let obs = env.try_reset(episode_seed)?;
@@ -269,6 +462,8 @@ impl EvaluativeRun {
             no_feedback_count: 0,
             held_back: 0,
             queried: Vec::new(),
+            pacing: AskPacing::default(),
+            next_episode_obs: None,
         })
     }
 
@@ -297,6 +492,11 @@ impl EvaluativeRun {
     /// Queries the method wanted to ask that a person's pace (`human_pace`) held back.
     pub fn queries_held_back(&self) -> u64 {
         self.held_back
+    }
+
+    /// Floods and silences of the rule so far.
+    pub fn pacing(&self) -> AskPacing {
+        self.pacing
     }
 
     /// Queries answered "no feedback" (the paper's NFC for human trainers).
@@ -333,15 +533,26 @@ impl EvaluativeRun {
         let uses_human_critic = self.config.sac.human_critic.is_some();
         self.learner.act(&self.obs, false, &mut self.action);
         let predicted = if uses_human_critic {
-            self.learner.human_estimate(&self.obs, &self.action)
+            self.human_estimate()
         } else {
             0.0
         };
         let step = self.env.try_step(&self.action)?;
+        // Rendered before any reset, so a viewer sees how the episode ended.
+        let final_state = step.outcome.map(|_| self.env.render());
+        let graph_reads_reset =
+            step.outcome.is_some() && self.config.graph_at_episode_end == GraphAtEpisodeEnd::Reset;
+        if graph_reads_reset {
+            self.reset_early()?;
+        }
+        let graph_obs = match &self.next_episode_obs {
+            Some(reset) if graph_reads_reset => reset.as_slice(),
+            _ => step.obs.as_slice(),
+        };
         let g = self
             .config
             .scene_graph
-            .after_step(self.env.as_ref(), &step.obs, &self.action);
+            .after_step(self.env.as_ref(), graph_obs, &self.action);
 
         // The schedule decides first (EF's coin is drawn every step either way); a person's
         // pace may then hold the query back.
@@ -379,17 +590,19 @@ impl EvaluativeRun {
             reward: step.reward * self.config.reward_scale,
             human: evaluation.map_or(0.0, Evaluation::value),
             next_obs: &step.obs,
-            terminated: step.terminated,
+            terminated: step.terminated
+                || (self.config.time_limit == TimeLimitEnd::Terminal
+                    && step.outcome == Some(Outcome::TimeLimit)),
         });
         if evaluation.is_some() {
             self.queried.push((self.steps, slot));
         }
+        self.pacing.step(self.steps, evaluation.is_some());
         let update = self.learner.update(&self.replay);
 
         self.steps += 1;
         self.episode_return += f64::from(step.reward);
         self.episode_length += 1;
-        let final_state = step.outcome.map(|_| self.env.render());
         let episode = match step.outcome {
             Some(outcome) => Some(self.finish_episode(outcome)?),
             None => {
@@ -447,13 +660,39 @@ impl EvaluativeRun {
             feedback_fraction: self.feedback_count as f64 / self.steps as f64,
             outcome,
             states_with_feedback: self.schedule.states_with_feedback() as u64,
+            steps_since_query: self.pacing.steps_since_query(self.steps),
+            longest_flood: self.pacing.longest_flood,
         };
         self.episodes += 1;
         self.episode_return = 0.0;
         self.episode_length = 0;
-        self.episode_seed = self.episode_seeds.random();
-        self.obs = self.env.try_reset(self.episode_seed)?;
+        match self.next_episode_obs.take() {
+            Some(obs) => self.obs = obs,
+            None => {
+                self.episode_seed = self.episode_seeds.random();
+                self.obs = self.env.try_reset(self.episode_seed)?;
+            }
+        }
         Ok(record)
+    }
+
+    /// Reset the env for the next episode now, keeping its first observation for
+    /// [`Self::finish_episode`] (the same seed and the same reset as there, only earlier).
+    fn reset_early(&mut self) -> Result<(), EnvFault> {
+        self.episode_seed = self.episode_seeds.random();
+        self.next_episode_obs = Some(self.env.try_reset(self.episode_seed)?);
+        Ok(())
+    }
+
+    /// H_hat for this step's action, shown to the human critic as the authors' runs showed it
+    /// (scaled by the oracle's action scale, 1 but for Reaching as run).
+    fn human_estimate(&mut self) -> f32 {
+        let scale = self.config.oracle.action_scale;
+        if scale == 1.0 {
+            return self.learner.human_estimate(&self.obs, &self.action);
+        }
+        let shown: Vec<f32> = self.action.iter().map(|a| a * scale).collect();
+        self.learner.human_estimate(&self.obs, &shown)
     }
 }
 

@@ -31,12 +31,16 @@ fn tiny(task: Task, method: &str) -> EvaluativeRunConfig {
     config
 }
 
-fn run(config: EvaluativeRunConfig, steps: u64) -> (EvaluativeRun, Scripted, Vec<EpisodeRecord>) {
-    let mut run = EvaluativeRun::new(config, steps);
-    let mut trainer = Scripted {
+fn scripted() -> Scripted {
+    Scripted {
         asked: 0,
         last_step: None,
-    };
+    }
+}
+
+fn run(config: EvaluativeRunConfig, steps: u64) -> (EvaluativeRun, Scripted, Vec<EpisodeRecord>) {
+    let mut run = EvaluativeRun::new(config, steps);
+    let mut trainer = scripted();
     let mut episodes = Vec::new();
     while run.steps() < steps {
         if let Some(e) = run.step(&mut trainer).episode {
@@ -162,4 +166,95 @@ fn a_transition_that_left_the_replay_buffer_is_not_relabelled() {
         "the oldest still held"
     );
     assert!(!ef.relabel(11, Evaluation::NoFeedback));
+}
+
+/// Every step's report of a run of `steps` steps, with the run's first observation after it.
+fn reports(
+    config: EvaluativeRunConfig,
+    steps: u64,
+) -> (EvaluativeRun, Vec<(StepReport, Vec<f32>)>) {
+    let mut run = EvaluativeRun::new(config, steps);
+    let mut trainer = scripted();
+    let mut out = Vec::new();
+    while run.steps() < steps {
+        let report = run.step(&mut trainer);
+        out.push((report, run.obs.clone()));
+    }
+    (run, out)
+}
+
+#[test]
+fn the_graph_at_an_episodes_end_reads_the_reset_observation_as_run() {
+    let mut as_run = tiny(Task::Reaching, "sac");
+    as_run.graph_at_episode_end = GraphAtEpisodeEnd::Reset;
+    let (_, head) = reports(tiny(Task::Reaching, "sac"), 2_000);
+    let (_, reset) = reports(as_run, 2_000);
+    let mut ends = 0;
+    for ((h, h_next), (r, r_next)) in head.iter().zip(&reset) {
+        // The same run step for step: only the graph of an episode's last step differs.
+        assert_eq!(h_next, r_next);
+        assert_eq!(h.episode, r.episode);
+        if r.episode.is_some() {
+            ends += 1;
+            assert_eq!(
+                r.abstract_state,
+                SceneGraph::Reaching.evaluate(r_next, &[0.0; 2])
+            );
+        } else {
+            assert_eq!(h.abstract_state, r.abstract_state);
+        }
+    }
+    assert!(ends >= 2, "{ends} episodes ended in 2000 steps");
+    // A success's last graph is the goal cell at the head, the home pose's cell as run.
+    let success = head.iter().zip(&reset).find(|((h, _), _)| {
+        h.episode
+            .as_ref()
+            .is_some_and(|e| e.outcome == Outcome::Success)
+    });
+    if let Some(((h, _), (r, _))) = success {
+        assert_ne!(h.abstract_state, r.abstract_state);
+    }
+}
+
+#[test]
+fn time_limit_ends_are_stored_as_terminal_only_as_run() {
+    for (time_limit, stored) in [
+        (TimeLimitEnd::Truncation, false),
+        (TimeLimitEnd::Terminal, true),
+    ] {
+        let mut config = tiny(Task::Reaching, "sac");
+        config.time_limit = time_limit;
+        let (run, steps) = reports(config, 1_500);
+        let mut limits = 0;
+        for (step, (report, _)) in steps.iter().enumerate() {
+            let terminal = run.replay.terminated(step);
+            match report.episode.as_ref().map(|e| e.outcome) {
+                Some(Outcome::TimeLimit) => {
+                    limits += 1;
+                    assert_eq!(terminal, stored, "{time_limit:?} at step {step}");
+                }
+                Some(Outcome::Success | Outcome::Failure) => assert!(terminal),
+                None => assert!(!terminal),
+            }
+        }
+        assert!(
+            limits >= 1,
+            "no episode reached the time limit in 1500 steps"
+        );
+    }
+}
+
+#[test]
+fn the_as_run_action_scale_shows_the_oracle_and_h_hat_a_tenth_of_the_action() {
+    // The expert's critic is the oracle's only judge: scaling both actions changes what it
+    // compares. Checked on the estimate the run shows the query rule.
+    let mut config = tiny(Task::Reaching, "dref-authors");
+    config.oracle.action_scale = 0.1;
+    let mut run = EvaluativeRun::new(config, 10);
+    run.action.copy_from_slice(&[0.8, -0.6]);
+    let shown = run.human_estimate();
+    let expected = run.learner.human_estimate(&run.obs.clone(), &[0.08, -0.06]);
+    assert_eq!(shown, expected);
+    let full = run.learner.human_estimate(&run.obs.clone(), &[0.8, -0.6]);
+    assert_ne!(shown, full);
 }

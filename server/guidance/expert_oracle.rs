@@ -36,10 +36,40 @@ pub enum OracleRule {
 pub const ALPHA_START: f64 = 0.999;
 pub const ALPHA_GROWTH_PER_STEP: f64 = 1e-8;
 
+/// What the oracle's critic is shown, beyond the rule: alpha's start, and a factor on both
+/// actions it compares. The authors' head runs 0.999 and the actions as the learner normalised
+/// them (1); their published runs differed (issue 33, `profile = "as-run"`): Lunar Lander's
+/// started alpha at 0.99, and Reaching's fed the expert's critic the env-scale actions (their
+/// robosuite arm's +-0.1 in x, y, z), so both the expert's and the learner's action reached it
+/// shrunk tenfold.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct OracleConfig {
+    pub alpha0: f64,
+    pub action_scale: f32,
+}
+
+impl Default for OracleConfig {
+    fn default() -> Self {
+        Self {
+            alpha0: ALPHA_START,
+            action_scale: 1.0,
+        }
+    }
+}
+
+impl OracleConfig {
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+}
+
 pub struct ExpertOracle {
     expert: Sac,
     rule: OracleRule,
+    config: OracleConfig,
     expert_action: Vec<f32>,
+    /// The learner's action as the critic is shown it (scaled by `config.action_scale`).
+    shown_action: Vec<f32>,
     /// The teacher's faults and their random stream (none: the paper's oracle).
     faults: FaultyJudge,
     /// The task's discount, for a myopic teacher's reward rate.
@@ -51,7 +81,9 @@ impl ExpertOracle {
         Self {
             expert,
             rule,
+            config: OracleConfig::default(),
             expert_action: vec![0.0; act_dim],
+            shown_action: vec![0.0; act_dim],
             faults: FaultyJudge::new(TeacherFaults::default(), 0),
             discount: 0.99,
         }
@@ -65,9 +97,14 @@ impl ExpertOracle {
         self
     }
 
-    /// The bar the learner's value must clear at step `step`.
-    fn bar(rule: OracleRule, step: u64, q_star: f64) -> f64 {
-        let alpha = Self::alpha(step);
+    /// The same oracle with `config`'s alpha start and action scale.
+    pub fn with_config(mut self, config: OracleConfig) -> Self {
+        self.config = config;
+        self
+    }
+
+    /// The bar the learner's value must clear when alpha is `alpha`.
+    fn bar(rule: OracleRule, alpha: f64, q_star: f64) -> f64 {
         match rule {
             OracleRule::Authors => alpha * q_star,
             OracleRule::SignAware => q_star - (1.0 - alpha) * q_star.abs(),
@@ -84,7 +121,8 @@ impl ExpertOracle {
     ) -> Evaluation {
         let (q_star, q) = (f64::from(q_expert), f64::from(q_learner));
         let scale = q_star.abs().max(1e-6);
-        let mut margin = (q - Self::bar(self.rule, step, q_star)) / scale;
+        let alpha = alpha_at(self.config.alpha0, step);
+        let mut margin = (q - Self::bar(self.rule, alpha, q_star)) / scale;
         if let Some(gamma) = self.faults.faults().myopia() {
             let rate = (1.0 - self.discount) * q_star;
             let immediate = (f64::from(reward) - rate) / ((1.0 - self.discount) * scale);
@@ -97,15 +135,25 @@ impl ExpertOracle {
         }
     }
 
-    /// alpha after `step` environment steps.
+    /// alpha after `step` environment steps, from the authors' head's start.
     pub fn alpha(step: u64) -> f64 {
-        ALPHA_START + ALPHA_GROWTH_PER_STEP * step as f64
+        alpha_at(ALPHA_START, step)
     }
 
-    /// The judgement given both critics' values, at step `step`.
+    /// The judgement given both critics' values, at step `step`, from the head's alpha start.
     pub fn judge(rule: OracleRule, step: u64, q_expert: f32, q_learner: f32) -> Evaluation {
+        Self::judge_with_alpha(rule, Self::alpha(step), q_expert, q_learner)
+    }
+
+    /// The judgement given both critics' values when alpha is `alpha`.
+    pub fn judge_with_alpha(
+        rule: OracleRule,
+        alpha: f64,
+        q_expert: f32,
+        q_learner: f32,
+    ) -> Evaluation {
         let (q_star, q) = (f64::from(q_expert), f64::from(q_learner));
-        if Self::bar(rule, step, q_star) < q {
+        if Self::bar(rule, alpha, q_star) < q {
             Evaluation::Good
         } else {
             Evaluation::Bad
@@ -113,13 +161,31 @@ impl ExpertOracle {
     }
 }
 
+/// alpha after `step` environment steps from `alpha0`.
+pub fn alpha_at(alpha0: f64, step: u64) -> f64 {
+    alpha0 + ALPHA_GROWTH_PER_STEP * step as f64
+}
+
 impl EvaluativeTrainer for ExpertOracle {
     fn evaluate(&mut self, query: &EvaluativeQuery<'_>) -> Evaluation {
         self.expert.act(query.obs, false, &mut self.expert_action);
+        let scale = self.config.action_scale;
+        let learner_action = if scale == 1.0 {
+            query.action
+        } else {
+            for a in &mut self.expert_action {
+                *a *= scale;
+            }
+            for (shown, a) in self.shown_action.iter_mut().zip(query.action) {
+                *shown = a * scale;
+            }
+            &self.shown_action
+        };
         let q_expert = self.expert.q_value(query.obs, &self.expert_action);
-        let q_learner = self.expert.q_value(query.obs, query.action);
+        let q_learner = self.expert.q_value(query.obs, learner_action);
         if self.faults.faults().is_perfect() {
-            return Self::judge(self.rule, query.step, q_expert, q_learner);
+            let alpha = alpha_at(self.config.alpha0, query.step);
+            return Self::judge_with_alpha(self.rule, alpha, q_expert, q_learner);
         }
         self.judge_with_faults(query.step, query.reward, q_expert, q_learner)
     }
@@ -201,6 +267,27 @@ mod tests {
             ExpertOracle::judge(OracleRule::SignAware, 0, 100.0, 99.95),
             ExpertOracle::judge(OracleRule::Authors, 0, 100.0, 99.95)
         );
+    }
+
+    #[test]
+    fn the_as_run_alpha_start_is_a_ten_times_wider_margin() {
+        // Lunar Lander as run: alpha from 0.99, so alpha Q* = 99.0 at Q* = 100 (the head's 99.9).
+        let alpha = alpha_at(0.99, 0);
+        assert_eq!(alpha, 0.99);
+        assert_eq!(
+            ExpertOracle::judge_with_alpha(OracleRule::Authors, alpha, 100.0, 99.5),
+            Evaluation::Good
+        );
+        assert_eq!(
+            ExpertOracle::judge(OracleRule::Authors, 0, 100.0, 99.5),
+            Evaluation::Bad
+        );
+        assert_eq!(
+            ExpertOracle::judge_with_alpha(OracleRule::Authors, alpha, 100.0, 98.9),
+            Evaluation::Bad
+        );
+        // It grows by the same 1e-8 a step: 0.991 after 100k steps.
+        assert!((alpha_at(0.99, 100_000) - 0.991).abs() < 1e-12);
     }
 
     #[test]

@@ -1,5 +1,6 @@
 //! Which steps ask the evaluative trainer, per method: plain SAC never asks, EF-p% asks with
-//! probability p at every step, DREF asks when its UCB rule ranks the abstract state high.
+//! probability p at every step, DREF asks when its UCB rule ranks the abstract state high
+//! (`dref`: the product's rule, `docs/dref.md`; `dref-authors`: exactly the authors' code).
 
 use std::fmt;
 use std::str::FromStr;
@@ -11,7 +12,8 @@ use serde::{Deserialize, Serialize};
 use super::query_rule::QueryRule;
 use crate::scene_graph::AbstractState;
 
-/// An evaluative-feedback method as the CLI and the API spell it: `sac`, `dref`, `ef-<p>`.
+/// An evaluative-feedback method as the CLI and the API spell it: `sac`, `dref`,
+/// `dref-authors`, `ef-<p>`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "String", into = "String")]
 pub enum EvaluativeMethod {
@@ -19,8 +21,20 @@ pub enum EvaluativeMethod {
     Sac,
     /// EF-p%: feedback at every step with probability `percent / 100`.
     Ef { percent: f64 },
-    /// DREF: the UCB query rule over abstract states.
+    /// DREF as the product runs it for people (`docs/dref.md`): the authors' UCB score, ranked
+    /// among recently visited states, under a ceiling on the rate, with the human critic
+    /// regressed on answered steps only.
     Dref,
+    /// DREF exactly as the authors' code has it (algorithms.md section 2): ranked among every
+    /// state with feedback, no ceiling, the human critic regressed on every step.
+    DrefAuthors,
+}
+
+impl EvaluativeMethod {
+    /// Whether the method asks by DREF's UCB rule (either form).
+    pub fn is_dref(self) -> bool {
+        matches!(self, EvaluativeMethod::Dref | EvaluativeMethod::DrefAuthors)
+    }
 }
 
 impl fmt::Display for EvaluativeMethod {
@@ -28,6 +42,7 @@ impl fmt::Display for EvaluativeMethod {
         match self {
             EvaluativeMethod::Sac => f.write_str("sac"),
             EvaluativeMethod::Dref => f.write_str("dref"),
+            EvaluativeMethod::DrefAuthors => f.write_str("dref-authors"),
             EvaluativeMethod::Ef { percent } => write!(f, "ef-{percent}"),
         }
     }
@@ -37,11 +52,15 @@ impl FromStr for EvaluativeMethod {
     type Err = String;
 
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let bad =
-            || format!("unknown method {s:?}: expected sac, dref or ef-<percent> (e.g. ef-25)");
+        let bad = || {
+            format!(
+                "unknown method {s:?}: expected sac, dref, dref-authors or ef-<percent> (e.g. ef-25)"
+            )
+        };
         match s {
             "sac" => Ok(EvaluativeMethod::Sac),
             "dref" => Ok(EvaluativeMethod::Dref),
+            "dref-authors" => Ok(EvaluativeMethod::DrefAuthors),
             _ => {
                 let percent: f64 = s
                     .strip_prefix("ef-")
@@ -83,7 +102,8 @@ pub enum FeedbackSchedule {
 }
 
 impl FeedbackSchedule {
-    /// The schedule of `method`; DREF uses `rule`, EF draws from a generator seeded by `seed`.
+    /// The schedule of `method`; DREF (either) uses `rule`, EF draws from a generator seeded by
+    /// `seed`.
     pub fn new(method: EvaluativeMethod, rule: QueryRule, seed: u64) -> Self {
         match method {
             EvaluativeMethod::Sac => FeedbackSchedule::Never,
@@ -91,16 +111,17 @@ impl FeedbackSchedule {
                 probability: percent / 100.0,
                 rng: Box::new(ChaCha8Rng::seed_from_u64(seed ^ 0xef00_0000_0000_00ef)),
             },
-            EvaluativeMethod::Dref => FeedbackSchedule::Dref(rule),
+            EvaluativeMethod::Dref | EvaluativeMethod::DrefAuthors => FeedbackSchedule::Dref(rule),
         }
     }
 
-    /// Whether to ask at this step, whose next state has abstract state `g`.
+    /// Whether to ask at this step, whose next state has abstract state `g` (called once a
+    /// step: DREF's rule remembers the visit).
     pub fn should_ask(&mut self, g: AbstractState) -> bool {
         match self {
             FeedbackSchedule::Never => false,
             FeedbackSchedule::Random { probability, rng } => rng.random_bool(*probability),
-            FeedbackSchedule::Dref(rule) => rule.should_query(g),
+            FeedbackSchedule::Dref(rule) => rule.visit(g),
         }
     }
 
@@ -129,7 +150,14 @@ mod tests {
     #[test]
     fn methods_parse_and_print_as_the_cli_spells_them() {
         for s in [
-            "sac", "dref", "ef-100", "ef-50", "ef-25", "ef-6.2", "ef-1.6",
+            "sac",
+            "dref",
+            "dref-authors",
+            "ef-100",
+            "ef-50",
+            "ef-25",
+            "ef-6.2",
+            "ef-1.6",
         ] {
             let m: EvaluativeMethod = s.parse().unwrap();
             assert_eq!(m.to_string(), s);

@@ -2,6 +2,8 @@
 //! ask (DRPL), and the synthetic trainers that answer.
 //!
 //! - `query_rule`: DREF's UCB rule over abstract states (Eq. 1-2 and the authors' form).
+//! - `recent_visits`, `ask_budget`: the product DREF's rank among recent visits and its ceiling on
+//!   the rate of queries (`docs/dref.md`); the authors' rule uses neither.
 //! - `feedback_schedule`: which steps ask, per method (DREF, EF-p%, SAC).
 //! - `evaluative_trainer`: the `EvaluativeTrainer` trait (synthetic oracle or a person) and H.
 //! - `expert_oracle`: the synthetic trainer, a SAC expert's critic judging the learner's action.
@@ -16,6 +18,7 @@
 //!   oracle and the preference run.
 
 pub mod agreement;
+pub mod ask_budget;
 pub mod drpl;
 pub mod evaluative_run;
 pub mod evaluative_trainer;
@@ -23,4 +26,5 @@ pub mod expert_oracle;
 pub mod feedback_schedule;
 pub mod human_pace;
 pub mod query_rule;
+pub mod recent_visits;
 pub mod teacher;

@@ -8,13 +8,18 @@
 //! - `paper` (Eq. 1 and 2): `UCB(g) = FPE(g) + c * sqrt(2 ln N / N(g))` with FPE the running mean
 //!   of `(H - H_hat)^2` in g; an abstract state without feedback scores +inf.
 //!
-//! Only abstract states that have received feedback are ranked; the rule asks iff at most k of
-//! them score strictly higher than the current state.
+//! The authors rank the current state among the abstract states that have received feedback
+//! and ask iff at most k of them score strictly higher. The product's DREF (`docs/dref.md`)
+//! keeps the score and changes whom it competes with and how often it may win: it ranks among
+//! the states visited in the last W steps ([`RecentVisits`]) and asks within a ceiling
+//! ([`AskBudget`]); both are off in the authors' rule.
 
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+use super::ask_budget::AskBudget;
+use super::recent_visits::RecentVisits;
 use crate::scene_graph::AbstractState;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
@@ -46,9 +51,17 @@ pub struct QueryRule {
     total: u64,
     /// Per abstract state; a `BTreeMap` so that checkpoints serialise in a stable order.
     stats: BTreeMap<AbstractState, StateStats>,
+    /// Rank among the states visited recently instead of among those with feedback (`None`:
+    /// the authors'; checkpoints written before it existed read as `None`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    recent: Option<RecentVisits>,
+    /// A ceiling on the rate of queries (`None`: the authors', no ceiling).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    budget: Option<AskBudget>,
 }
 
 impl QueryRule {
+    /// The authors' rule: ranked among the states with feedback, no ceiling.
     pub fn new(c: f64, k: usize, form: UcbForm) -> Self {
         Self {
             c,
@@ -56,7 +69,21 @@ impl QueryRule {
             form,
             total: 0,
             stats: BTreeMap::new(),
+            recent: None,
+            budget: None,
         }
+    }
+
+    /// Rank among the states visited in the last `window` steps.
+    pub fn ranked_among_recent(mut self, window: usize) -> Self {
+        self.recent = Some(RecentVisits::new(window));
+        self
+    }
+
+    /// Ask on at most `rate` of the steps, at most about `burst` in a row.
+    pub fn with_ceiling(mut self, rate: f64, burst: u32) -> Self {
+        self.budget = Some(AskBudget::new(rate, burst));
+        self
     }
 
     /// N, the feedback received so far.
@@ -86,25 +113,43 @@ impl QueryRule {
         }
     }
 
-    /// Whether to ask for feedback in abstract state `g`: iff at most `k` abstract states that
-    /// have received feedback score strictly higher than `g`.
+    /// Whether to ask for feedback in abstract state `g`: iff at most `k` of the ranked states
+    /// (those with feedback, or those visited recently) score strictly higher than `g`, and,
+    /// with a ceiling, the budget has a query for a state of that rank.
     pub fn should_query(&self, g: AbstractState) -> bool {
+        let k = match &self.budget {
+            None => self.k,
+            Some(budget) if budget.can_ask() => budget.ranks_allowed(self.k),
+            Some(_) => return false,
+        };
         let own = self.score(g);
-        let mut higher = 0usize;
-        for other in self.stats.keys() {
-            if self.score(*other) > own {
-                higher += 1;
-                if higher > self.k {
-                    return false;
-                }
-            }
+        let higher_than = |other: &AbstractState| self.score(*other) > own;
+        match &self.recent {
+            None => count_at_most(self.stats.keys().filter(|o| higher_than(o)), k),
+            Some(recent) => count_at_most(recent.states().filter(higher_than), k),
         }
-        true
+    }
+
+    /// One environment step reached `g`: remember the visit, earn the step's share of a query,
+    /// and say whether to ask. The authors' rule has no memory of visits, so this is
+    /// [`QueryRule::should_query`] for it.
+    pub fn visit(&mut self, g: AbstractState) -> bool {
+        if let Some(recent) = &mut self.recent {
+            recent.push(g);
+        }
+        if let Some(budget) = &mut self.budget {
+            budget.tick();
+        }
+        self.should_query(g)
     }
 
     /// Record the trainer's answer `h` in `g`, where the human critic predicted `h_hat` before
-    /// this step's update. Every answer counts, "no feedback" (0) included.
+    /// this step's update. Every answer counts, "no feedback" (0) included, and spends a query
+    /// of the ceiling's budget.
     pub fn record(&mut self, g: AbstractState, h: f32, h_hat: f32) {
+        if let Some(budget) = &mut self.budget {
+            budget.spend();
+        }
         let diff = f64::from(h) - f64::from(h_hat);
         let error = match self.form {
             UcbForm::Authors => diff.abs(),
@@ -115,6 +160,11 @@ impl QueryRule {
         s.mean_error += (error - s.mean_error) / s.count as f64;
         self.total += 1;
     }
+}
+
+/// Whether `items` has at most `k` elements, looking at no more than k + 1 of them.
+fn count_at_most<T>(items: impl Iterator<Item = T>, k: usize) -> bool {
+    items.take(k + 1).count() <= k
 }
 
 #[cfg(test)]
@@ -256,5 +306,107 @@ mod tests {
         rule.record(d, 1.0, -1.0);
         assert!(!rule.should_query(a));
         assert!(rule.should_query(d));
+    }
+
+    /// The freeze of the authors' rule: states ranked high by early answers are never visited
+    /// again, and the one the learner now visits ranks below k of them for good.
+    fn frozen_history(rule: &mut QueryRule) -> AbstractState {
+        for g in 1..=5 {
+            rule.record(AbstractState(g), 1.0, -1.0); // badly predicted: error 2
+        }
+        let now = AbstractState(9);
+        for _ in 0..50 {
+            rule.record(now, 1.0, 1.0); // well predicted: error 0, and many answers
+        }
+        now
+    }
+
+    #[test]
+    fn the_authors_rule_freezes_and_the_recent_rank_does_not() {
+        let mut authors = QueryRule::new(0.1, 2, UcbForm::Authors);
+        let now = frozen_history(&mut authors);
+        assert!(
+            (0..5_000).all(|_| !authors.visit(now)),
+            "the authors' rule asks again"
+        );
+
+        let mut recent = QueryRule::new(0.1, 2, UcbForm::Authors).ranked_among_recent(100);
+        let now = frozen_history(&mut recent);
+        // Only the states visited in the window compete: the learner's own state is the best.
+        assert!(recent.visit(now));
+        let asked = (0..5_000).filter(|_| recent.visit(now)).count();
+        assert_eq!(
+            asked, 5_000,
+            "nothing else is recent, so every visit may ask"
+        );
+    }
+
+    #[test]
+    fn the_recent_rank_still_prefers_the_worse_predicted_of_the_visited_states() {
+        let (good, bad) = (AbstractState(1), AbstractState(2));
+        let mut rule = QueryRule::new(0.01, 0, UcbForm::Authors).ranked_among_recent(10);
+        rule.record(good, 1.0, 0.9);
+        rule.record(bad, 1.0, -1.0);
+        rule.visit(good);
+        assert!(
+            rule.visit(bad),
+            "the worse predicted state is the best ranked"
+        );
+        assert!(
+            !rule.visit(good),
+            "k = 0: only the best ranked recent state asks"
+        );
+        // Once `bad` has left the window, `good` is the best of what the learner visits.
+        for _ in 0..10 {
+            rule.visit(good);
+        }
+        assert!(rule.visit(good));
+    }
+
+    #[test]
+    fn a_ceiling_bounds_the_flood_of_the_first_states() {
+        // With k + 1 or fewer states answered the authors' rule asks at every step.
+        let (a, b) = (AbstractState(1), AbstractState(2));
+        let mut authors = QueryRule::new(0.1, 2, UcbForm::Authors);
+        let mut capped = QueryRule::new(0.1, 2, UcbForm::Authors)
+            .ranked_among_recent(1_000)
+            .with_ceiling(0.05, 20);
+        let run = |rule: &mut QueryRule| {
+            let (mut asked, mut streak, mut longest) = (0u32, 0u32, 0u32);
+            for step in 0..20_000u32 {
+                let g = if step % 7 < 4 { a } else { b };
+                if rule.visit(g) {
+                    rule.record(g, 1.0, 0.5);
+                    asked += 1;
+                    streak += 1;
+                    longest = longest.max(streak);
+                } else {
+                    streak = 0;
+                }
+            }
+            (asked, longest)
+        };
+        assert_eq!(run(&mut authors), (20_000, 20_000));
+        let (asked, longest) = run(&mut capped);
+        assert!(asked <= 1_020, "asked {asked} of 20000 under a 5 % ceiling");
+        assert!(longest <= 21, "{longest} in a row");
+    }
+
+    #[test]
+    fn a_rule_with_window_and_ceiling_survives_a_serde_round_trip() {
+        let mut rule = QueryRule::new(0.2, 4, UcbForm::Authors)
+            .ranked_among_recent(50)
+            .with_ceiling(0.05, 20);
+        for g in 0..30 {
+            if rule.visit(AbstractState(g % 7)) {
+                rule.record(AbstractState(g % 7), 1.0, 0.0);
+            }
+        }
+        let back: QueryRule = serde_json::from_str(&serde_json::to_string(&rule).unwrap()).unwrap();
+        assert_eq!(back, rule);
+        // A checkpoint of the authors' rule written before these fields existed still reads.
+        let old = r#"{"c":0.2,"k":4,"form":"authors","total":0,"stats":{}}"#;
+        let old: QueryRule = serde_json::from_str(old).unwrap();
+        assert_eq!(old, QueryRule::new(0.2, 4, UcbForm::Authors));
     }
 }

@@ -12,7 +12,7 @@
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use super::{EvaluativeRun, EvaluativeRunConfig, EvaluativeTrainer};
+use super::{AskPacing, EvaluativeRun, EvaluativeRunConfig, EvaluativeTrainer};
 use crate::guidance::feedback_schedule::FeedbackSchedule;
 use crate::guidance::query_rule::QueryRule;
 use crate::rl::Sac;
@@ -42,6 +42,9 @@ struct RunState {
     episode_seeds: RngState,
     schedule: ScheduleState,
     queried: Vec<(u64, usize)>,
+    /// The rule's floods and silences (checkpoints written before it existed read as none).
+    #[serde(default)]
+    pacing: AskPacing,
     replay: ReplayLayout,
     trainer: serde_json::Value,
     /// Whatever the caller keeps with the run (the CLI: recent episodes, wall time so far).
@@ -114,6 +117,7 @@ impl EvaluativeRun {
             episode_seeds: RngState::of(&self.episode_seeds),
             schedule: ScheduleState::of(&self.schedule),
             queried: self.queried.clone(),
+            pacing: self.pacing,
             replay,
             trainer: trainer.checkpoint_state(),
             notes,
@@ -216,6 +220,8 @@ impl EvaluativeRun {
             no_feedback_count: state.no_feedback_count,
             held_back: state.held_back,
             queried: state.queried,
+            pacing: state.pacing,
+            next_episode_obs: None,
         };
         Ok((run, state.notes))
     }

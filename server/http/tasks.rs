@@ -38,7 +38,7 @@ pub fn describe() -> Value {
     json!({
         "tasks": tasks,
         "methods": {
-            "evaluative": ["dref", "ef-100", "ef-50", "ef-25", "ef-<percent>", "sac"],
+            "evaluative": ["dref", "dref-authors", "ef-100", "ef-50", "ef-25", "ef-<percent>", "sac"],
             "preference": QueryMethod::ALL.iter().map(|m| m.id()).collect::<Vec<_>>(),
         },
         "trainers": ["human", "synthetic"],

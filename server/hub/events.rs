@@ -111,6 +111,7 @@ impl Owner {
                 }
                 self.push_return(e.episode_return);
                 self.progress.feedback_fraction = e.feedback_fraction;
+                self.progress.pacing.get_or_insert_default().episode(&e);
                 self.publish();
                 self.broadcast_progress();
             }

@@ -54,7 +54,10 @@ impl Writer {
     /// Take over `rec` and log what never changes: axes, and the series' display names.
     pub(super) fn new(rec: RecordingStream, graph: SceneGraph) -> anyhow::Result<Self> {
         // The table-top tasks are 3D; Lunar Lander and a remote env's frames are 2D.
-        if matches!(graph, SceneGraph::Reaching | SceneGraph::Placing) {
+        if matches!(
+            graph,
+            SceneGraph::Reaching | SceneGraph::Placing | SceneGraph::PlacingAsRun
+        ) {
             scene::log_view_coordinates(&rec)?;
         }
         for predicate in graph.predicates() {

@@ -12,7 +12,8 @@ use serde::Serialize;
 use super::methods::{order_key, task_rank};
 use super::run_files::{PrefsRun, TrainRun};
 use super::stats::{MeanSe, interpolate, linspace, mean_se};
-use crate::sim::Task;
+use crate::guidance::evaluative_run::{AskPacing, frozen_share};
+use crate::sim::{Outcome, Task};
 
 /// Points on the common step grid of a Figure 3 curve (every 1 % of training).
 pub const FIG3_GRID_POINTS: usize = 101;
@@ -34,10 +35,95 @@ pub struct Fig3Method {
     pub curve: Curve,
     /// Cumulative reward at the end of training (from each seed's summary).
     pub final_return: MeanSe,
+    /// The same per seed, in seed-directory order (for rank tests between methods).
+    pub finals: Vec<f64>,
     /// Feedback as a percentage of environment steps.
     pub feedback_pct: MeanSe,
     /// The shortest run among the seeds: where the common grid ends.
     pub steps: u64,
+    /// Seeds whose last 10 episodes show the task learnt ([`learned`]).
+    pub seeds_learned: usize,
+    /// Per seed, the share of episodes (in %) after which the rule had been silent for 10k
+    /// steps while the last 10 episodes failed ("frozen").
+    pub frozen_pct: MeanSe,
+    /// The longest stretch of consecutive asked steps after the first 2k, over the seeds, and
+    /// whether it is exact (else a lower bound read from whole episodes of older runs).
+    pub longest_flood_after_2k: (u64, bool),
+}
+
+/// Episodes behind "learnt": the last 10, as the bar reads.
+pub const LEARNED_EPISODES: usize = 10;
+
+/// Whether a run learnt its task: 8 or more successes in its last 10 episodes on Reaching and
+/// Placing, a mean return of 200 or more over them on Lunar Lander (Gymnasium's "solved").
+pub fn learned(run: &TrainRun) -> bool {
+    let tail = &run.episodes[run.episodes.len().saturating_sub(LEARNED_EPISODES)..];
+    if tail.len() < LEARNED_EPISODES {
+        return false;
+    }
+    match run.key.task {
+        Task::LunarLander => {
+            tail.iter().map(|e| e.episode_return).sum::<f64>() / tail.len() as f64 >= 200.0
+        }
+        Task::Reaching | Task::Placing => {
+            tail.iter()
+                .filter(|e| e.outcome == Some(Outcome::Success))
+                .count()
+                >= 8
+        }
+    }
+}
+
+/// Per episode: steps since the rule last asked, at its end. Runs written before the column
+/// existed give a lower bound: the steps since the end of the last episode in which the count
+/// of answers grew.
+fn steps_since_query(run: &TrainRun) -> Vec<u64> {
+    let mut last_growth_end: Option<u64> = None;
+    let mut previous = 0u64;
+    run.episodes
+        .iter()
+        .map(|e| {
+            if e.feedback_count > previous {
+                last_growth_end = Some(e.step);
+            }
+            previous = e.feedback_count;
+            e.steps_since_query
+                .unwrap_or_else(|| e.step - last_growth_end.unwrap_or(0))
+        })
+        .collect()
+}
+
+/// The share of a run's episodes (in %) after which its rule was frozen.
+pub fn frozen_pct(run: &TrainRun) -> f64 {
+    let episodes: Vec<(u64, bool)> = steps_since_query(run)
+        .into_iter()
+        .zip(&run.episodes)
+        .map(|(since, e)| (since, e.outcome == Some(Outcome::Success)))
+        .collect();
+    100.0 * frozen_share(&episodes)
+}
+
+/// A run's longest stretch of consecutive asked steps after its first 2k, and whether it is
+/// exact: from `summary.json` where the run measured it, else a lower bound from consecutive
+/// episodes asked on every one of their steps.
+pub fn longest_flood_after_2k(run: &TrainRun) -> (u64, bool) {
+    if let Some(n) = run.summary.longest_flood_after_2k {
+        return (n, true);
+    }
+    let (mut longest, mut stretch, mut previous) = (0u64, 0u64, (0u64, 0u64));
+    for e in &run.episodes {
+        let (steps, asked) = (e.step - previous.0, e.feedback_count - previous.1);
+        stretch = if steps > 0 && asked == steps {
+            stretch + steps
+        } else {
+            0
+        };
+        if e.step > AskPacing::SETTLED_AFTER {
+            longest = longest.max(stretch.min(e.step - AskPacing::SETTLED_AFTER));
+        }
+        previous = (e.step, e.feedback_count);
+    }
+    (longest, false)
 }
 
 /// One Figure 3 panel: every method that has a finished run on the task, in legend order.
@@ -140,12 +226,20 @@ pub fn aggregate_fig3(runs: &[TrainRun], points: usize) -> Vec<Fig3Task> {
                         .iter()
                         .map(|r| 100.0 * r.summary.feedback_fraction)
                         .collect();
+                    let frozen: Vec<f64> = seeds.iter().map(|r| frozen_pct(r)).collect();
+                    let floods = seeds.iter().map(|r| longest_flood_after_2k(r));
+                    let longest =
+                        floods.fold((0, true), |(n, exact), (m, e)| (n.max(m), exact && e));
                     Fig3Method {
                         method,
                         curve: mean_on_grid(&curves, &grid),
                         final_return: mean_se(&finals),
+                        finals,
                         feedback_pct: mean_se(&feedback),
                         steps,
+                        seeds_learned: seeds.iter().filter(|r| learned(r)).count(),
+                        frozen_pct: mean_se(&frozen),
+                        longest_flood_after_2k: longest,
                     }
                 })
                 .collect(),

@@ -23,6 +23,8 @@ fn train_run(task: Task, method: &str, seed: u64, steps: u64, ends: &[(u64, f64)
             cumulative_return: cum,
             feedback_count: 0,
             feedback_fraction: 0.0,
+            steps_since_query: None,
+            longest_flood: None,
         })
         .collect();
     let final_cum = ends.last().map_or(0.0, |e| e.1);
@@ -44,6 +46,7 @@ fn train_run(task: Task, method: &str, seed: u64, steps: u64, ends: &[(u64, f64)
             final_mean_return: 0.0,
             wall_seconds: None,
             updates_per_second: None,
+            longest_flood_after_2k: None,
         },
     }
 }

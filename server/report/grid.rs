@@ -41,6 +41,15 @@ impl Figure {
 
 /// The grid's name for "EF at DREF's rate": it becomes `ef-<p>` per task once p is known.
 pub const MATCHED_EF: &str = "ef-dref";
+/// "EF at the authors' DREF's rate", the same for the `dref-authors` row.
+pub const MATCHED_EF_AUTHORS: &str = "ef-dref-authors";
+
+/// Each matched-rate row with the DREF row whose measured rate it takes.
+pub const MATCHED_ROWS: [(&str, &str); 2] =
+    [(MATCHED_EF, "dref"), (MATCHED_EF_AUTHORS, DREF_AUTHORS)];
+
+/// The grid's name for exactly the authors' DREF.
+pub const DREF_AUTHORS: &str = "dref-authors";
 
 /// The grid's name for plain SAC at the env's own reward scale. The `sac` row follows the
 /// authors, who ran Reaching's SAC baseline at reward 10 instead of 100 (`reward_scale=0.1`);
@@ -48,10 +57,11 @@ pub const MATCHED_EF: &str = "ef-dref";
 /// runs, so it is meant for `--tasks reaching`.
 pub const SAC_UNSCALED: &str = "sac-r100";
 
-/// The grid's name for DREF with its human critic regressed on queried steps only
+/// The grid's name for the authors' DREF with its human critic regressed on queried steps only
 /// (`human_critic_mask`, our choice in algorithms.md; the authors regress it on every sampled
-/// step, the unqueried ones as H = 0). Not in the paper: a row beside DREF where its query rule
-/// stops asking and the unqueried zeros wash out what the critic learnt (fig3/README.md).
+/// step, the unqueried ones as H = 0). Not in the paper: a row beside the authors' DREF where
+/// its query rule stops asking and the unqueried zeros wash out what the critic learnt
+/// (fig3/README.md); the first of the product DREF's changes (docs/dref.md).
 pub const DREF_MASKED: &str = "dref-masked";
 
 /// The `--set` overrides a Figure 3 row adds on `task`, beyond the grid's own: the authors'
@@ -116,7 +126,13 @@ impl GridConfig {
                 Figure::Fig3 => {
                     matches!(
                         m.as_str(),
-                        "dref" | "sac" | MATCHED_EF | SAC_UNSCALED | DREF_MASKED
+                        "dref"
+                            | DREF_AUTHORS
+                            | "sac"
+                            | MATCHED_EF
+                            | MATCHED_EF_AUTHORS
+                            | SAC_UNSCALED
+                            | DREF_MASKED
                     ) || m
                         .strip_prefix("ef-")
                         .and_then(|p| p.parse::<f64>().ok())
@@ -129,7 +145,8 @@ impl GridConfig {
             if !ok {
                 let known = match self.figure {
                     Figure::Fig3 => {
-                        "dref, sac, sac-r100, dref-masked, ef-<p> (0 <= p <= 100), ef-dref"
+                        "dref, dref-authors, sac, sac-r100, dref-masked, ef-<p> (0 <= p <= 100), \
+                         ef-dref, ef-dref-authors"
                     }
                     Figure::Fig5 | Figure::Robustness => "drpl, drpl-ss, fragment, full",
                 };
@@ -147,14 +164,19 @@ impl GridConfig {
         self.steps.unwrap_or_else(|| paper_steps(task))
     }
 
-    /// Whether the grid runs "EF at DREF's rate".
-    pub fn wants_matched(&self) -> bool {
-        self.figure == Figure::Fig3 && self.methods.iter().any(|m| m == MATCHED_EF)
+    /// The matched-rate rows the grid runs, each with the DREF row it follows.
+    pub fn matched_rows(&self) -> Vec<(&'static str, &'static str)> {
+        MATCHED_ROWS
+            .into_iter()
+            .filter(|(matched, _)| {
+                self.figure == Figure::Fig3 && self.methods.iter().any(|m| m == matched)
+            })
+            .collect()
     }
 
-    /// Whether DREF itself is in the grid (else the matched rate is the paper's).
-    pub fn has_dref(&self) -> bool {
-        self.figure == Figure::Fig3 && self.methods.iter().any(|m| m == "dref")
+    /// Whether `dref` (a DREF row's name) is in the grid (else its matched rate is the paper's).
+    pub fn has(&self, dref: &str) -> bool {
+        self.figure == Figure::Fig3 && self.methods.iter().any(|m| m == dref)
     }
 
     /// The run of `method` (a concrete name, never [`MATCHED_EF`]) on `task` with `seed`.
@@ -167,10 +189,10 @@ impl GridConfig {
             Figure::Fig5 => ("prefs", "--queries", self.queries.to_string()),
         };
         // The fair SAC control is plain `train --method sac` at the env's reward scale; the
-        // masked DREF row is `train --method dref` with its mask set.
+        // masked DREF row is `train --method dref-authors` with its mask set.
         let train_method = match method {
             SAC_UNSCALED => "sac",
-            DREF_MASKED => "dref",
+            DREF_MASKED => DREF_AUTHORS,
             other => other,
         };
         let mut args: Vec<String> = [
@@ -216,9 +238,10 @@ impl GridConfig {
             .methods
             .iter()
             .map(String::as_str)
-            .filter(|m| *m != MATCHED_EF)
+            .filter(|m| !MATCHED_ROWS.iter().any(|(matched, _)| m == matched))
             .collect();
-        methods.sort_by_key(|m| *m != "dref");
+        let followed = |m: &str| MATCHED_ROWS.iter().any(|(_, dref)| *dref == m);
+        methods.sort_by_key(|m| !followed(m));
         let mut runs = Vec::new();
         for method in methods {
             for &task in &self.tasks {

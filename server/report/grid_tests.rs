@@ -87,7 +87,8 @@ fn report_grid_runs_dref_first_and_holds_back_the_matched_baseline() {
             "lunar-lander/sac/seed1",
         ]
     );
-    assert!(c.wants_matched() && c.has_dref());
+    assert_eq!(c.matched_rows(), [(MATCHED_EF, "dref")]);
+    assert!(c.has("dref") && !c.has(DREF_AUTHORS));
     assert_eq!(c.total_runs(), 12);
     let matched: Vec<String> = c
         .matched_runs(Task::Reaching, 1.63)
@@ -123,7 +124,7 @@ fn report_grid_extra_rows_are_train_runs_with_their_settings() {
     assert_eq!(masked.dir, Path::new("grid/reaching/dref-masked/seed1"));
     assert_eq!(
         masked.args[..5],
-        ["train", "--task", "reaching", "--method", "dref"]
+        ["train", "--task", "reaching", "--method", "dref-authors"]
     );
     let sets: Vec<&str> = masked
         .args

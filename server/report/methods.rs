@@ -7,7 +7,10 @@ use crate::sim::Task;
 /// The methods of Figure 3 in the paper's legend order.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Fig3Method {
+    /// The product's DREF (docs/dref.md).
     Dref,
+    /// DREF exactly as the authors' code has it: the row that reproduces the paper's.
+    DrefAuthors,
     Ef100,
     Ef50,
     Ef25,
@@ -27,6 +30,7 @@ impl Fig3Method {
     pub fn parse(method: &str) -> Option<Self> {
         Some(match method {
             "dref" => Self::Dref,
+            "dref-authors" => Self::DrefAuthors,
             "ef-100" => Self::Ef100,
             "ef-50" => Self::Ef50,
             "ef-25" => Self::Ef25,
@@ -37,23 +41,44 @@ impl Fig3Method {
         })
     }
 
-    /// Position in the legend and the table: the paper's order, the matched-rate baseline last.
+    /// Position in the legend and the table: the paper's order with the authors' DREF beside
+    /// ours, the matched-rate baseline after the paper's rows, our extra rows last.
     pub fn rank(self) -> usize {
         match self {
             Self::Dref => 0,
-            Self::Ef100 => 1,
-            Self::Ef50 => 2,
-            Self::Ef25 => 3,
-            Self::Sac => 4,
-            Self::EfMatched(_) => 5,
-            Self::SacUnscaled => 6,
-            Self::DrefMasked => 7,
+            Self::DrefAuthors => 1,
+            Self::Ef100 => 2,
+            Self::Ef50 => 3,
+            Self::Ef25 => 4,
+            Self::Sac => 5,
+            Self::EfMatched(_) => 6,
+            Self::SacUnscaled => 7,
+            Self::DrefMasked => 8,
         }
+    }
+
+    /// The paper's column for this method (DREF, EF-100, EF-50, EF-25, SAC, EF at DREF's
+    /// rate), if it has one: both DREF rows are held against the paper's DREF.
+    pub fn published_column(self) -> Option<usize> {
+        match self {
+            Self::Dref | Self::DrefAuthors => Some(0),
+            Self::Ef100 => Some(1),
+            Self::Ef50 => Some(2),
+            Self::Ef25 => Some(3),
+            Self::Sac => Some(4),
+            Self::EfMatched(_) => Some(5),
+            Self::SacUnscaled | Self::DrefMasked => None,
+        }
+    }
+
+    /// Whether the method asks by DREF's rule (so its feedback rate is measured, not set).
+    pub fn is_dref(self) -> bool {
+        matches!(self, Self::Dref | Self::DrefAuthors | Self::DrefMasked)
     }
 
     /// Whether the method's name already says how much feedback it gets (so a legend need not).
     pub fn rate_in_name(self) -> bool {
-        !matches!(self, Self::Dref | Self::DrefMasked)
+        !self.is_dref()
     }
 }
 
@@ -68,9 +93,10 @@ pub fn display_name(method: &str) -> String {
     }
     match Fig3Method::parse(method) {
         Some(Fig3Method::Dref) => "DREF".into(),
+        Some(Fig3Method::DrefAuthors) => "DREF (authors' code)".into(),
         Some(Fig3Method::Sac) => "SAC".into(),
         Some(Fig3Method::SacUnscaled) => "SAC (reward 100)".into(),
-        Some(Fig3Method::DrefMasked) => "DREF (H on queried steps)".into(),
+        Some(Fig3Method::DrefMasked) => "DREF (authors' code, H on answered steps)".into(),
         Some(_) => format!("EF-{}%", &method["ef-".len()..]),
         None => method.into(),
     }
@@ -141,8 +167,8 @@ pub fn published_fig3(task: Task, method: Fig3Method) -> Option<Published> {
         Task::Placing => ([43.3, 43.6, 23.4, 23.7, 16.4, 10.1], 8.4),
     };
     Some(Published {
-        cumulative_k: *row.get(method.rank())?,
-        feedback_pct: (method == Fig3Method::Dref).then_some(dref_rate),
+        cumulative_k: row[method.published_column()?],
+        feedback_pct: (method.published_column() == Some(0)).then_some(dref_rate),
     })
 }
 
@@ -177,6 +203,10 @@ mod tests {
     #[test]
     fn report_method_names_parse_and_display() {
         assert_eq!(Fig3Method::parse("dref"), Some(Fig3Method::Dref));
+        assert_eq!(
+            Fig3Method::parse("dref-authors"),
+            Some(Fig3Method::DrefAuthors)
+        );
         assert_eq!(Fig3Method::parse("ef-50"), Some(Fig3Method::Ef50));
         assert_eq!(
             Fig3Method::parse("ef-6.2"),
@@ -192,11 +222,29 @@ mod tests {
 
     #[test]
     fn report_methods_sort_in_the_papers_order() {
-        let mut m = vec!["sac", "ef-6.2", "ef-25", "dref", "zz", "ef-100", "ef-50"];
+        let mut m = vec![
+            "sac",
+            "ef-6.2",
+            "ef-25",
+            "dref-authors",
+            "dref",
+            "zz",
+            "ef-100",
+            "ef-50",
+        ];
         m.sort_by_key(|s| order_key(s));
         assert_eq!(
             m,
-            ["dref", "ef-100", "ef-50", "ef-25", "sac", "ef-6.2", "zz"]
+            [
+                "dref",
+                "dref-authors",
+                "ef-100",
+                "ef-50",
+                "ef-25",
+                "sac",
+                "ef-6.2",
+                "zz"
+            ]
         );
     }
 
@@ -217,6 +265,10 @@ mod tests {
         let ll = published_fig3(Task::LunarLander, Fig3Method::Dref).unwrap();
         assert_eq!(ll.cumulative_k, 34.1);
         assert_eq!(ll.feedback_pct, Some(6.3));
+        assert_eq!(
+            published_fig3(Task::LunarLander, Fig3Method::DrefAuthors),
+            Some(ll)
+        );
         let p = published_fig3(Task::Placing, Fig3Method::EfMatched(8.4)).unwrap();
         assert_eq!((p.cumulative_k, p.feedback_pct), (10.1, None));
         assert_eq!(

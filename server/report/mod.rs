@@ -9,6 +9,7 @@
 //! - [`run_files`]: reads a run directory's `metrics.csv` / `alignment.csv` and `summary.json`.
 //! - [`stats`], [`aggregate`] (pure): mean and standard error over seeds, on a common step grid
 //!   for Figure 3 and per query for Figure 5.
+//! - [`rank_test`] (pure): the one-sided exact Mann-Whitney U test over seeds.
 //! - [`table`] (pure): `table.md`, with the paper's published values beside ours.
 //! - [`robustness`] (pure): the grid, numbers and table of `reproduce robustness` (simulated
 //!   teachers that make mistakes).
@@ -22,6 +23,7 @@ pub mod grid;
 pub mod local;
 pub mod methods;
 pub mod plot;
+pub mod rank_test;
 pub mod robustness;
 pub mod run_end;
 pub mod run_files;

@@ -108,6 +108,7 @@ fn train(task: Task, label: &str, seed: u64, cumulative: f64) -> TrainRun {
             final_mean_return: 1.0,
             wall_seconds: None,
             updates_per_second: None,
+            longest_flood_after_2k: None,
         },
     }
 }

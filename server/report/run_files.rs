@@ -33,6 +33,12 @@ pub struct EpisodeRow {
     pub feedback_count: u64,
     /// Share of environment steps so far with feedback, in [0, 1].
     pub feedback_fraction: f64,
+    /// Steps since the rule last asked, at the episode's end (absent from older files).
+    #[serde(default)]
+    pub steps_since_query: Option<u64>,
+    /// The longest stretch of consecutive asked steps so far (absent from older files).
+    #[serde(default)]
+    pub longest_flood: Option<u64>,
 }
 
 /// `summary.json` of a `train` run.
@@ -51,6 +57,10 @@ pub struct TrainSummary {
     pub wall_seconds: Option<f64>,
     #[serde(default)]
     pub updates_per_second: Option<f64>,
+    /// The longest stretch of consecutive asked steps from step 2,000 on (absent from runs
+    /// written before it was measured).
+    #[serde(default)]
+    pub longest_flood_after_2k: Option<u64>,
 }
 
 /// One row of `alignment.csv`: the belief after a query.

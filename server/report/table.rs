@@ -5,8 +5,10 @@ use std::fmt::Write;
 
 use super::aggregate::{Fig3Task, Fig5Task};
 use super::methods::{
-    Fig3Method, Published, display_name, paper_steps, published_fig3, published_ratio, task_title,
+    Fig3Method, Published, display_name, matched_ef_method, paper_steps, published_fig3,
+    published_ratio, task_title,
 };
+use super::rank_test::mann_whitney_greater;
 use super::stats::MeanSe;
 
 /// A cumulative reward as the paper prints it: in thousands with one decimal ("34.1k") when
@@ -57,6 +59,10 @@ fn fmt_steps(steps: u64) -> String {
 const FIG3_INTRO: &str = "\
 Cumulative reward summed over all finished episodes at the end of training, mean ± standard \
 error over seeds; feedback is the share of environment steps on which the oracle answered. \
+A seed learns when 8 or more of its last 10 episodes succeed (Lunar Lander: their mean return \
+is 200 or more); frozen is the share of episodes after which the rule had not asked for 10k \
+steps while the last 10 episodes failed; a flood is a stretch of consecutive asked steps \
+(\">=\": a lower bound read from whole episodes, for runs that predate its measurement). \
 \"Paper\" is the published run (algorithms.md, section 2) as plotted, about a quarter of its \
 true sum. Our simulators are not the paper's, so compare the ratios to EF-100%: ours (of our \
 true sums) beside the paper's.
@@ -90,8 +96,8 @@ pub fn fig3_table(tasks: &[Fig3Task]) -> String {
         let _ = write!(
             out,
             "\n## {}: {} steps (paper: {})\n\n\
-             | Method | Cumulative reward | Feedback | Seeds | Ratio to EF-100% | Paper's ratio | Paper |\n\
-             |---|---:|---:|---:|---:|---:|---:|\n",
+             | Method | Cumulative reward | Feedback | Seeds | Seeds that learn | Frozen | Longest flood after 2k | Ratio to EF-100% | Paper's ratio | Paper |\n\
+             |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
             task_title(task.task),
             ours,
             fmt_steps(paper_steps(task.task)),
@@ -111,11 +117,26 @@ pub fn fig3_table(tasks: &[Fig3Task]) -> String {
             }
             let paper = kind.map_or("–".into(), |k| fmt_published(task.task, k));
             let paper_ratio = kind.and_then(|k| published_ratio(task.task, k));
+            // Freezes and floods are a query rule's; EF's rate is its definition.
+            let (frozen, flood) = if kind.is_none_or(Fig3Method::is_dref) {
+                let (n, exact) = m.longest_flood_after_2k;
+                (
+                    fmt_pct(m.frozen_pct),
+                    if exact {
+                        n.to_string()
+                    } else {
+                        format!(">= {n}")
+                    },
+                )
+            } else {
+                ("–".into(), "–".into())
+            };
             let row = format!(
-                "| {name} | {} | {} | {} | {} | {} | {paper} |\n",
+                "| {name} | {} | {} | {} | {} | {frozen} | {flood} | {} | {} | {paper} |\n",
                 fmt_reward(m.final_return, thousands),
                 fmt_pct(m.feedback_pct),
                 m.final_return.n,
+                m.seeds_learned,
                 fmt_ratio(Some(m.final_return.mean), ef100),
                 fmt_ratio(paper_ratio, Some(1.0)),
             );
@@ -130,10 +151,18 @@ pub fn fig3_table(tasks: &[Fig3Task]) -> String {
             Fig3Method::EfMatched(f64::NAN),
         ];
         for kind in published {
-            if !rows.iter().any(|(rank, _)| *rank == kind.rank()) {
+            // Either DREF row stands for the paper's DREF.
+            let have = |k: Fig3Method| rows.iter().any(|(rank, _)| *rank == k.rank());
+            let present = match kind {
+                Fig3Method::Dref => have(Fig3Method::Dref) || have(Fig3Method::DrefAuthors),
+                _ => have(kind),
+            };
+            if !present {
                 let name = match kind {
                     Fig3Method::EfMatched(_) => "EF at DREF's rate".to_string(),
-                    Fig3Method::Dref | Fig3Method::DrefMasked => "DREF".into(),
+                    Fig3Method::Dref | Fig3Method::DrefAuthors | Fig3Method::DrefMasked => {
+                        "DREF".into()
+                    }
                     Fig3Method::Ef100 => "EF-100%".into(),
                     Fig3Method::Ef50 => "EF-50%".into(),
                     Fig3Method::Ef25 => "EF-25%".into(),
@@ -143,7 +172,7 @@ pub fn fig3_table(tasks: &[Fig3Task]) -> String {
                 let ratio = fmt_ratio(published_ratio(task.task, kind), Some(1.0));
                 rows.push((
                     kind.rank(),
-                    format!("| {name} | – | – | 0 | – | {ratio} | {paper} |\n"),
+                    format!("| {name} | – | – | 0 | – | – | – | – | {ratio} | {paper} |\n"),
                 ));
             }
         }
@@ -151,6 +180,36 @@ pub fn fig3_table(tasks: &[Fig3Task]) -> String {
         rows.sort_by_key(|(rank, _)| *rank);
         for (_, row) in rows {
             out.push_str(&row);
+        }
+        out.push_str(&dref_against_matched(task));
+    }
+    out
+}
+
+/// For each DREF row with an "EF at its rate" row beside it: whether DREF's seeds lie above
+/// EF's, by the one-sided exact Mann-Whitney U test over seeds.
+fn dref_against_matched(task: &Fig3Task) -> String {
+    let mut out = String::new();
+    for dref in &task.methods {
+        if !Fig3Method::parse(&dref.method).is_some_and(Fig3Method::is_dref) {
+            continue;
+        }
+        let matched = matched_ef_method(dref.feedback_pct.mean);
+        let Some(ef) = task.methods.iter().find(|m| m.method == matched) else {
+            continue;
+        };
+        if let Some(t) = mann_whitney_greater(&dref.finals, &ef.finals) {
+            let _ = write!(
+                out,
+                "\n{} above {} (its rate): one-sided exact Mann-Whitney U = {:.1} over {} and {} \
+                 seeds, p = {:.4}.\n",
+                display_name(&dref.method),
+                display_name(&ef.method),
+                t.u,
+                t.n_a,
+                t.n_b,
+                t.p_one_sided
+            );
         }
     }
     out

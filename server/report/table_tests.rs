@@ -13,8 +13,12 @@ fn fig3_row(method: &str, final_return: MeanSe, feedback: MeanSe) -> Fig3Row {
         method: method.into(),
         curve: Curve::default(),
         final_return,
+        finals: Vec::new(),
         feedback_pct: feedback,
         steps: 150_000,
+        seeds_learned: 0,
+        frozen_pct: ms(0.0, 0.0, final_return.n),
+        longest_flood_after_2k: (0, true),
     }
 }
 
@@ -39,27 +43,33 @@ fn report_numbers_are_formatted_like_the_paper() {
 
 #[test]
 fn report_fig3_table_puts_the_papers_values_beside_ours() {
+    let mut dref = fig3_row("dref", ms(30_000.0, 1_000.0, 5), ms(6.2, 0.4, 5));
+    dref.finals = vec![31e3, 29e3, 30e3, 32e3, 28e3];
+    let mut matched = fig3_row("ef-6.2", ms(-1_000.0, 2_000.0, 4), ms(6.1, 0.1, 4));
+    matched.finals = vec![-1e3, -3e3, 1e3, 0.0];
     let tasks = [Fig3Task {
         task: Task::LunarLander,
         methods: vec![
-            fig3_row("dref", ms(30_000.0, 1_000.0, 5), ms(6.2, 0.4, 5)),
+            dref,
             fig3_row("ef-100", ms(25_000.0, 1_000.0, 5), ms(100.0, 0.0, 5)),
             fig3_row("sac", ms(860.0, 500.0, 5), ms(0.0, 0.0, 5)),
-            fig3_row("ef-6.2", ms(-1_000.0, 2_000.0, 4), ms(6.1, 0.1, 4)),
+            matched,
         ],
     }];
     let text = fig3_table(&tasks);
     let expected = "\
 ## Lunar-Lander: 150k steps (paper: 150k)
 
-| Method | Cumulative reward | Feedback | Seeds | Ratio to EF-100% | Paper's ratio | Paper |
-|---|---:|---:|---:|---:|---:|---:|
-| DREF | 30.0k ± 1.0k | 6.2 ± 0.4 % | 5 | 1.20 | 1.17 | 34.1k (6.3 %) |
-| EF-100% | 25.0k ± 1.0k | 100.0 ± 0.0 % | 5 | 1.00 | 1.00 | 29.1k |
-| EF-50% | – | – | 0 | – | 0.83 | 24.2k |
-| EF-25% | – | – | 0 | – | 0.64 | 18.7k |
-| SAC | 0.9k ± 0.5k | 0.0 ± 0.0 % | 5 | 0.03 | 0.60 | 17.6k |
-| EF-6.2% (DREF's rate) | -1.0k ± 2.0k | 6.1 ± 0.1 % | 4 | -0.04 | -0.21 | -6.0k |
+| Method | Cumulative reward | Feedback | Seeds | Seeds that learn | Frozen | Longest flood after 2k | Ratio to EF-100% | Paper's ratio | Paper |
+|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|
+| DREF | 30.0k ± 1.0k | 6.2 ± 0.4 % | 5 | 0 | 0.0 ± 0.0 % | 0 | 1.20 | 1.17 | 34.1k (6.3 %) |
+| EF-100% | 25.0k ± 1.0k | 100.0 ± 0.0 % | 5 | 0 | – | – | 1.00 | 1.00 | 29.1k |
+| EF-50% | – | – | 0 | – | – | – | – | 0.83 | 24.2k |
+| EF-25% | – | – | 0 | – | – | – | – | 0.64 | 18.7k |
+| SAC | 0.9k ± 0.5k | 0.0 ± 0.0 % | 5 | 0 | – | – | 0.03 | 0.60 | 17.6k |
+| EF-6.2% (DREF's rate) | -1.0k ± 2.0k | 6.1 ± 0.1 % | 4 | 0 | – | – | -0.04 | -0.21 | -6.0k |
+
+DREF above EF-6.2% (its rate): one-sided exact Mann-Whitney U = 20.0 over 5 and 4 seeds, p = 0.0079.
 ";
     assert!(text.starts_with("# Figure 3"), "{text}");
     assert!(
@@ -83,11 +93,13 @@ fn report_fig3_table_names_a_missing_matched_baseline_and_shows_step_ranges() {
         "{text}"
     );
     assert!(
-        text.contains("| EF at DREF's rate | – | – | 0 | – | 0.89 | 10.2k |"),
+        text.contains("| EF at DREF's rate | – | – | 0 | – | – | – | – | 0.89 | 10.2k |"),
         "{text}"
     );
     assert!(
-        text.contains("| DREF | 9 ± 1 | 1.6 ± 0.1 % | 2 | – | 1.00 | 11.4k (1.6 %) |"),
+        text.contains(
+            "| DREF | 9 ± 1 | 1.6 ± 0.1 % | 2 | 0 | 0.0 ± 0.0 % | 0 | – | 1.00 | 11.4k (1.6 %) |"
+        ),
         "{text}"
     );
 }

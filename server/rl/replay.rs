@@ -131,6 +131,11 @@ impl ReplayBuffer {
         i
     }
 
+    /// Whether the transition in `slot` was stored as terminal (no bootstrap past it).
+    pub fn terminated(&self, slot: usize) -> bool {
+        self.dones[slot] != 0.0
+    }
+
     /// Replace the human feedback stored in `slot`.
     pub fn set_human(&mut self, slot: usize, human: f32) {
         assert!(slot < self.len, "slot {slot} not filled");

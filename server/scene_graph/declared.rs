@@ -87,6 +87,7 @@ pub fn declare(predicates: &[DeclaredPredicate]) -> Result<&'static [Predicate],
 pub enum GraphRepr {
     Reaching,
     Placing,
+    PlacingAsRun,
     LunarLander {
         #[serde(default)]
         side_engines_on_a0: bool,
@@ -101,6 +102,7 @@ impl From<SceneGraph> for GraphRepr {
         match graph {
             SceneGraph::Reaching => GraphRepr::Reaching,
             SceneGraph::Placing => GraphRepr::Placing,
+            SceneGraph::PlacingAsRun => GraphRepr::PlacingAsRun,
             SceneGraph::LunarLander { side_engines_on_a0 } => {
                 GraphRepr::LunarLander { side_engines_on_a0 }
             }
@@ -124,6 +126,7 @@ impl TryFrom<GraphRepr> for SceneGraph {
         Ok(match repr {
             GraphRepr::Reaching => SceneGraph::Reaching,
             GraphRepr::Placing => SceneGraph::Placing,
+            GraphRepr::PlacingAsRun => SceneGraph::PlacingAsRun,
             GraphRepr::LunarLander { side_engines_on_a0 } => {
                 SceneGraph::LunarLander { side_engines_on_a0 }
             }

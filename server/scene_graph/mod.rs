@@ -31,6 +31,8 @@ pub struct Predicate {
 pub enum SceneGraph {
     Reaching,
     Placing,
+    /// Placing's graph as the authors' published runs had it (`scene_graph = "as-run"`).
+    PlacingAsRun,
     LunarLander {
         /// The authors' code tests both side-engine predicates on a0 instead of a1 (a bug we
         /// reproduce only on request).
@@ -58,6 +60,7 @@ impl SceneGraph {
         match self {
             SceneGraph::Reaching => &reaching::PREDICATES,
             SceneGraph::Placing => &placing::PREDICATES,
+            SceneGraph::PlacingAsRun => &placing::AS_RUN_PREDICATES,
             SceneGraph::LunarLander { .. } => &lunar_lander::PREDICATES,
             SceneGraph::Declared(predicates) => predicates,
         }
@@ -75,6 +78,7 @@ impl SceneGraph {
         match *self {
             SceneGraph::Reaching => reaching::evaluate(next_obs),
             SceneGraph::Placing => placing::evaluate(next_obs),
+            SceneGraph::PlacingAsRun => placing::evaluate_as_run(next_obs),
             SceneGraph::LunarLander { side_engines_on_a0 } => {
                 lunar_lander::evaluate(next_obs, action, side_engines_on_a0)
             }

@@ -59,9 +59,81 @@ pub fn evaluate(next_obs: &[f32]) -> AbstractState {
     AbstractState::from_bits(&[x0, x1, x2, y0, y1, y2, z > HIGH_Z, z <= HIGH_Z, open, !open])
 }
 
+/// The graph the authors' published Placing runs used (issue 33; their
+/// `robosuite_pipeline_optim_active_tamer_rl_ballbasket.py` at commits f2ff175 and 5dce179, of
+/// 2022-06-05/06): 8 bits, no gripper bits, and the "above"/"below" pair reading
+/// `'z': newState[0][1]`, i.e. the sign of **y**. Above/below then split only the centred y band
+/// (behind implies below, beyond implies above): 3 x 4 = 12 reachable cells, not 36. The
+/// authors' comparisons are strict (x exactly at +-0.05 sets no x bit), and so are these.
+pub const AS_RUN_PREDICATES: [Predicate; 8] = [
+    PREDICATES[0],
+    PREDICATES[1],
+    PREDICATES[2],
+    PREDICATES[3],
+    PREDICATES[4],
+    PREDICATES[5],
+    Predicate {
+        name: "above_as_run",
+        label: "gripper \"above\" hoop (as run: y > 0)",
+    },
+    Predicate {
+        name: "below_as_run",
+        label: "gripper \"below\" hoop (as run: y < 0)",
+    },
+];
+
+/// The as-run graph on `next_obs` = gripper (x, y, z, g) relative to the hoop.
+pub fn evaluate_as_run(next_obs: &[f32]) -> AbstractState {
+    let (x, y) = (next_obs[0], next_obs[1]);
+    let (hx, hy) = (GOAL_HALF_X, GOAL_HALF_Y);
+    AbstractState::from_bits(&[
+        x < -hx,
+        x > -hx && x < hx,
+        x > hx,
+        y < -hy,
+        y > -hy && y < hy,
+        y > hy,
+        y > 0.0,
+        y < 0.0,
+    ])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_as_run_graph_has_the_authors_twelve_cells_on_a_sweep() {
+        // A sweep over the table at every height and gripper state: z and g never matter. (Off
+        // the lines x = +-0.05, y = 0 and y = +-0.125, where strict comparisons set fewer bits.)
+        let mut seen = std::collections::BTreeSet::new();
+        for i in 0..40 {
+            for j in 0..40 {
+                for (z, g) in [(0.8f32, -1.0f32), (1.2, 1.0)] {
+                    let (x, y) = (-0.3777 + 0.019 * i as f32, -0.3493 + 0.0175 * j as f32);
+                    let a = evaluate_as_run(&[x, y, z, g]);
+                    assert_eq!(a, evaluate_as_run(&[x, y, 1.0, 1.0]));
+                    seen.insert(a);
+                }
+            }
+        }
+        assert_eq!(seen.len(), 12, "{seen:?}");
+    }
+
+    #[test]
+    fn the_as_run_graph_on_a_scripted_path_reads_y_for_above() {
+        // From the home pose (-0.23, 0) ... sideways to the hoop, then beyond it in y.
+        let path = [
+            ([-0.23f32, 0.0, 1.0, 1.0], "10001000"), // y = 0: neither "above" nor "below"
+            ([-0.23, 0.01, 0.9, 1.0], "10001010"),
+            ([0.0, -0.01, 1.2, -1.0], "01001001"),
+            ([0.0, -0.2, 1.2, -1.0], "01010001"),
+            ([0.1, 0.2, 0.8, 1.0], "00100110"),
+        ];
+        for (obs, bits) in path {
+            assert_eq!(evaluate_as_run(&obs).to_bit_string(8), bits, "{obs:?}");
+        }
+    }
 
     fn bits(obs: [f32; 4]) -> String {
         evaluate(&obs).to_bit_string(10)

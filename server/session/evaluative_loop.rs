@@ -90,6 +90,7 @@ pub(super) fn run(
                             act_dim,
                             OracleRule::Authors,
                         )
+                        .with_config(config.oracle)
                         .with_faults(
                             config.teacher,
                             config.seed,

@@ -2,10 +2,12 @@
 //! method, then every setting given, each checked once against its range and against the
 //! task and method family it belongs to.
 
-use super::{Settings, TargetEntropy, people};
+use super::{Profile, SceneGraphChoice, Settings, TargetEntropy, as_run, people};
 use crate::guidance::drpl::run::PreferenceRunConfig;
 use crate::guidance::drpl::selection::QueryMethod;
-use crate::guidance::evaluative_run::EvaluativeRunConfig;
+use crate::guidance::evaluative_run::{
+    DEFAULT_CEILING, EvaluativeRunConfig, FeedbackCeiling, QueryRuleConfig,
+};
 use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::guidance::human_pace::HumanPace;
 use crate::rl::{HumanCriticConfig, SacConfig};
@@ -97,9 +99,18 @@ impl Settings {
             c,
             k,
             ucb,
+            rank_window,
+            max_feedback_rate,
+            feedback_burst,
             reward_scale,
             max_queries_per_minute,
+            profile,
+            oracle_alpha0,
+            oracle_action_scale,
+            graph_at_episode_end,
+            time_limit,
             side_engines_on_a0,
+            scene_graph,
             variant,
             start,
             success,
@@ -132,6 +143,9 @@ impl Settings {
             return Err(format!(
                 "{key} is a setting of preference methods (drpl, drpl-ss, fragment, full), not {method}"
             ));
+        }
+        if *profile == Some(Profile::AsRun) {
+            as_run::apply(&mut config)?;
         }
         let sac = &mut config.sac;
         if let Some(h) = hidden {
@@ -188,13 +202,41 @@ impl Settings {
         if let Some(form) = ucb {
             config.query_rule.form = *form;
         }
+        apply_query_pacing(
+            &mut config.query_rule,
+            *rank_window,
+            *max_feedback_rate,
+            *feedback_burst,
+        )?;
         set_positive(&mut config.reward_scale, *reward_scale, "reward_scale")?;
         if let Some(n) = max_queries_per_minute.filter(|n| *n > 0) {
             let pace_hz = self.session()?.pace_hz;
             config.human_pace = Some(HumanPace::new(n, pace_hz));
         }
         config.teacher = people::teacher_faults(self)?;
-        apply_scene_graph(&mut config.scene_graph, *side_engines_on_a0)?;
+        if let Some(a) = oracle_alpha0 {
+            if !(a.is_finite() && *a > 0.0 && *a <= 1.0) {
+                return Err(format!(
+                    "oracle_alpha0: expected a number in (0, 1], got {a}"
+                ));
+            }
+            config.oracle.alpha0 = *a;
+        }
+        if let Some(s) = oracle_action_scale {
+            if !(s.is_finite() && *s > 0.0) {
+                return Err(format!(
+                    "oracle_action_scale: expected a positive number, got {s}"
+                ));
+            }
+            config.oracle.action_scale = *s;
+        }
+        if let Some(g) = graph_at_episode_end {
+            config.graph_at_episode_end = *g;
+        }
+        if let Some(t) = time_limit {
+            config.time_limit = *t;
+        }
+        apply_scene_graph(&mut config.scene_graph, *side_engines_on_a0, *scene_graph)?;
         apply_env(
             &mut config.env,
             &task,
@@ -261,9 +303,18 @@ impl Settings {
             c,
             k,
             ucb,
+            rank_window,
+            max_feedback_rate,
+            feedback_burst,
             reward_scale,
             max_queries_per_minute,
+            profile,
+            oracle_alpha0,
+            oracle_action_scale,
+            graph_at_episode_end,
+            time_limit,
             side_engines_on_a0,
+            scene_graph,
             variant,
             start,
             success,
@@ -298,8 +349,16 @@ impl Settings {
             ("c", c.is_some()),
             ("k", k.is_some()),
             ("ucb", ucb.is_some()),
+            ("rank_window", rank_window.is_some()),
+            ("max_feedback_rate", max_feedback_rate.is_some()),
+            ("feedback_burst", feedback_burst.is_some()),
             ("reward_scale", reward_scale.is_some()),
             ("max_queries_per_minute", max_queries_per_minute.is_some()),
+            ("profile", profile.is_some()),
+            ("oracle_alpha0", oracle_alpha0.is_some()),
+            ("oracle_action_scale", oracle_action_scale.is_some()),
+            ("graph_at_episode_end", graph_at_episode_end.is_some()),
+            ("time_limit", time_limit.is_some()),
         ];
         if let Some((key, _)) = evaluative_only.iter().find(|(_, set)| *set) {
             return Err(format!(
@@ -348,7 +407,7 @@ impl Settings {
             belief.samples = n;
         }
         config.teacher = people::teacher_faults(self)?;
-        apply_scene_graph(&mut config.scene_graph, *side_engines_on_a0)?;
+        apply_scene_graph(&mut config.scene_graph, *side_engines_on_a0, *scene_graph)?;
         apply_env(
             &mut config.env,
             &task,
@@ -362,6 +421,45 @@ impl Settings {
         )?;
         Ok(config)
     }
+}
+
+/// The product rule's window and ceiling (docs/dref.md), on any DREF: 0 switches either off.
+fn apply_query_pacing(
+    rule: &mut QueryRuleConfig,
+    rank_window: Option<usize>,
+    max_feedback_rate: Option<f64>,
+    feedback_burst: Option<u32>,
+) -> Result<(), String> {
+    if let Some(w) = rank_window {
+        rule.rank_window = w;
+    }
+    match max_feedback_rate {
+        None => {}
+        Some(0.0) => rule.ceiling = None,
+        Some(r) if r.is_finite() && r > 0.0 && r <= 1.0 => {
+            let burst = rule.ceiling.map_or(DEFAULT_CEILING.burst, |c| c.burst);
+            rule.ceiling = Some(FeedbackCeiling { rate: r, burst });
+        }
+        Some(r) => {
+            return Err(format!(
+                "max_feedback_rate: expected a share of steps in (0, 1], or 0 for no ceiling, got {r}"
+            ));
+        }
+    }
+    if let Some(b) = feedback_burst {
+        if b == 0 {
+            return Err("feedback_burst: expected at least 1".into());
+        }
+        match &mut rule.ceiling {
+            Some(c) => c.burst = b,
+            None => {
+                return Err(
+                    "feedback_burst: the rule has no ceiling; set max_feedback_rate too".into(),
+                );
+            }
+        }
+    }
+    Ok(())
 }
 
 fn critic(sac: &mut SacConfig) -> &mut HumanCriticConfig {
@@ -404,14 +502,24 @@ fn set_count(slot: &mut usize, value: Option<usize>, key: &str) -> Result<(), St
 fn apply_scene_graph(
     graph: &mut SceneGraph,
     side_engines_on_a0: Option<bool>,
+    choice: Option<SceneGraphChoice>,
 ) -> Result<(), String> {
-    match (side_engines_on_a0, graph) {
+    match (side_engines_on_a0, &mut *graph) {
+        (None, _) => {}
+        (Some(on), SceneGraph::LunarLander { side_engines_on_a0 }) => *side_engines_on_a0 = on,
+        (Some(_), _) => return Err("side_engines_on_a0 applies to lunar-lander only".into()),
+    }
+    match (choice, *graph) {
         (None, _) => Ok(()),
-        (Some(on), SceneGraph::LunarLander { side_engines_on_a0 }) => {
-            *side_engines_on_a0 = on;
+        (Some(SceneGraphChoice::Head), SceneGraph::Placing | SceneGraph::PlacingAsRun) => {
+            *graph = SceneGraph::Placing;
             Ok(())
         }
-        (Some(_), _) => Err("side_engines_on_a0 applies to lunar-lander only".into()),
+        (Some(SceneGraphChoice::AsRun), SceneGraph::Placing | SceneGraph::PlacingAsRun) => {
+            *graph = SceneGraph::PlacingAsRun;
+            Ok(())
+        }
+        (Some(_), _) => Err("scene_graph applies to placing only".into()),
     }
 }
 

@@ -285,6 +285,13 @@ async function showDetail() {
   $("fig-alignment").classList.toggle("hidden", !pref);
   const metrics = [`${s.progress.toLocaleString()} of ${s.budget.toLocaleString()} ${s.unit}`, `${s.answers?.total ?? 0} answers (${s.answers?.by_trainer ?? 0} by the trainer, ${s.answers?.timeouts ?? 0} timed out)`, `no feedback: ${s.answers?.no_feedback ?? 0}`];
   if (s.trainer_seconds != null) metrics.push(`trainer time: ${s.trainer_seconds.toFixed(0)} s`);
+  const pacing = s.latest?.pacing;
+  if (pacing && s.method !== "sac") {
+    // The rule's pacing as a person feels it (docs/dref.md).
+    metrics.push(`longest flood: ${pacing.longest_flood} queries in a row`);
+    metrics.push(`frozen after ${pacing.frozen_episodes} of ${pacing.episodes} episodes`);
+    metrics.push(`last query ${pacing.steps_since_query} steps ago`);
+  }
   $("detail-metrics").textContent = metrics.join(" · ");
   let episodes = [];
   try {

@@ -16,7 +16,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::font;
-use super::methods::order_key;
+use super::methods::{Fig3Method, order_key};
 
 /// Pixels of one panel; a figure is `tasks` panels side by side.
 pub const PANEL_SIZE: (u32, u32) = (560, 440);
@@ -44,14 +44,21 @@ const TAB10: [RGBColor; 10] = [
 /// A method's colour: fixed by its place in the paper's legend (so DREF and DRPL are blue, as in
 /// the paper, and a method keeps its colour across panels); unknown methods share the rest.
 fn method_color(method: &str) -> RGBColor {
-    let (rank, name) = order_key(method);
-    if rank < 6 {
-        return TAB10[rank];
+    // The paper's rows keep the paper's colours (DREF's is ours too), the authors' DREF and EF at
+    // DREF's rate fixed ones; any other row a colour of its name.
+    let slot = match Fig3Method::parse(method) {
+        Some(Fig3Method::DrefAuthors) => Some(6),
+        Some(Fig3Method::DrefMasked | Fig3Method::SacUnscaled) => None,
+        Some(kind) => kind.published_column(),
+        None => Some(order_key(method).0).filter(|rank| *rank < 4),
+    };
+    if let Some(slot) = slot {
+        return TAB10[slot];
     }
-    let spread = name
+    let spread = method
         .bytes()
         .fold(0usize, |h, b| h.wrapping_mul(31) + b as usize);
-    TAB10[6 + spread % 4]
+    TAB10[7 + spread % 3]
 }
 
 /// Figure size for `panels` panels (at least one, so an empty grid still makes a figure).
@@ -226,6 +233,8 @@ mod tests {
         assert_eq!(method_color("dref"), TAB10[0]);
         assert_eq!(method_color("drpl"), TAB10[0]);
         assert_eq!(method_color("sac"), TAB10[4]);
+        assert_eq!(method_color("ef-2.5"), TAB10[5]);
+        assert_eq!(method_color("dref-authors"), TAB10[6]);
         assert_eq!(method_color("something"), method_color("something"));
     }
 }
