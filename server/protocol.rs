@@ -318,6 +318,53 @@ mod tests {
     use proptest::prelude::*;
 
     #[test]
+    fn a_sessions_pacing_counts_frozen_episodes_as_the_grid_report_does() {
+        use crate::guidance::evaluative_run::{EpisodeRecord, frozen_share};
+        use crate::sim::Outcome;
+        // Twelve failed episodes 1,000 steps apart; the rule last asked at step 2,999.
+        let records: Vec<EpisodeRecord> = (1..=12u64)
+            .map(|i| EpisodeRecord {
+                step: 1_000 * i,
+                episode: i - 1,
+                episode_return: 0.0,
+                length: 1_000,
+                cumulative_return: 0.0,
+                feedback_count: 3,
+                feedback_fraction: 0.0,
+                outcome: if i == 1 {
+                    Outcome::Success
+                } else {
+                    Outcome::Failure
+                },
+                states_with_feedback: 1,
+                steps_since_query: (1_000 * i).saturating_sub(3_000),
+                longest_flood: 3,
+            })
+            .collect();
+        let mut pacing = RulePacing::default();
+        for e in &records {
+            pacing.episode(e);
+        }
+        // By the 12th episode's end (step 12k) the rule has been silent for 9k steps: the
+        // last 10 episodes failed, but that is not yet a freeze...
+        assert_eq!(pacing.frozen_episodes, 0);
+        // ... which it is once the silence reaches 10k steps.
+        let mut late = records[11].clone();
+        late.step = 13_000;
+        late.steps_since_query = 10_000;
+        pacing.episode(&late);
+        assert_eq!(pacing.frozen_episodes, 1);
+        assert_eq!((pacing.episodes, pacing.longest_flood), (13, 3));
+        // The grid's report counts the same episodes.
+        let mut all: Vec<(u64, bool)> = records
+            .iter()
+            .map(|e| (e.steps_since_query, e.outcome == Outcome::Success))
+            .collect();
+        all.push((10_000, false));
+        assert!((frozen_share(&all) - 1.0 / 13.0).abs() < 1e-12);
+    }
+
+    #[test]
     fn answers_parse_in_both_forms() {
         assert_eq!(
             parse_client(r#"{"type":"answer","id":7,"value":-1}"#).unwrap(),
