@@ -291,6 +291,53 @@ mod tests {
     }
 
     #[test]
+    fn the_as_run_oracle_judges_both_actions_scaled_as_computed_by_hand() {
+        use crate::rl::SacConfig;
+        use crate::scene_graph::AbstractState;
+        use crate::sim::Task;
+        let mut config = SacConfig::for_task(Task::Reaching);
+        config.hidden = vec![16, 16];
+        let expert = Sac::new(2, 2, config, 5);
+        let as_run = OracleConfig {
+            alpha0: 0.99,
+            action_scale: 0.1,
+        };
+        let mut oracle =
+            ExpertOracle::new(expert.clone(), 2, OracleRule::Authors).with_config(as_run);
+        // By hand, on a copy of the expert with the same random stream: its sampled action and
+        // the learner's, both times 0.1, through its critic, against alpha = 0.99 + 1e-8 step.
+        let mut by_hand = expert;
+        for (i, obs) in [[-0.23f32, 0.0], [0.1, -0.2], [0.3, 0.3], [-0.05, 0.12]]
+            .iter()
+            .enumerate()
+        {
+            let action = [0.9f32 - 0.5 * i as f32, -0.7 + 0.4 * i as f32];
+            let step = 1_000 * i as u64;
+            let mut star = [0.0f32; 2];
+            by_hand.act(obs, false, &mut star);
+            let star = star.map(|a| a * 0.1);
+            let q_star = f64::from(by_hand.q_value(obs, &star));
+            let q = f64::from(by_hand.q_value(obs, &action.map(|a| a * 0.1)));
+            let expected = if (0.99 + 1e-8 * step as f64) * q_star < q {
+                Evaluation::Good
+            } else {
+                Evaluation::Bad
+            };
+            let query = EvaluativeQuery {
+                step,
+                obs,
+                action: &action,
+                next_obs: obs,
+                reward: 0.0,
+                abstract_state: AbstractState(0),
+                predicted: 0.0,
+            };
+            let got = oracle.evaluate(&query);
+            assert_eq!(got, expected, "obs {obs:?}");
+        }
+    }
+
+    #[test]
     fn the_bar_reaches_the_experts_own_value_late_in_a_run() {
         assert_eq!(
             ExpertOracle::judge(OracleRule::Authors, 100_000, 100.0, 99.99),
