@@ -49,6 +49,18 @@ pub struct Fig3Method {
     /// The longest stretch of consecutive asked steps after the first 2k, over the seeds, and
     /// whether it is exact (else a lower bound read from whole episodes of older runs).
     pub longest_flood_after_2k: (u64, bool),
+    /// The same per run, with its seed and whether it learnt.
+    pub runs: Vec<RunPacing>,
+}
+
+/// One run's pacing, for the per-run table.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RunPacing {
+    pub seed: u64,
+    pub learned: bool,
+    pub feedback_pct: f64,
+    pub frozen_pct: f64,
+    pub longest_flood_after_2k: (u64, bool),
 }
 
 /// Episodes behind "learnt": the last 10, as the bar reads.
@@ -226,10 +238,21 @@ pub fn aggregate_fig3(runs: &[TrainRun], points: usize) -> Vec<Fig3Task> {
                         .iter()
                         .map(|r| 100.0 * r.summary.feedback_fraction)
                         .collect();
-                    let frozen: Vec<f64> = seeds.iter().map(|r| frozen_pct(r)).collect();
-                    let floods = seeds.iter().map(|r| longest_flood_after_2k(r));
-                    let longest =
-                        floods.fold((0, true), |(n, exact), (m, e)| (n.max(m), exact && e));
+                    let pacing: Vec<RunPacing> = seeds
+                        .iter()
+                        .map(|r| RunPacing {
+                            seed: r.key.seed,
+                            learned: learned(r),
+                            feedback_pct: 100.0 * r.summary.feedback_fraction,
+                            frozen_pct: frozen_pct(r),
+                            longest_flood_after_2k: longest_flood_after_2k(r),
+                        })
+                        .collect();
+                    let frozen: Vec<f64> = pacing.iter().map(|r| r.frozen_pct).collect();
+                    let longest = pacing.iter().fold((0, true), |(n, exact), r| {
+                        let (m, e) = r.longest_flood_after_2k;
+                        (n.max(m), exact && e)
+                    });
                     Fig3Method {
                         method,
                         curve: mean_on_grid(&curves, &grid),
@@ -237,9 +260,10 @@ pub fn aggregate_fig3(runs: &[TrainRun], points: usize) -> Vec<Fig3Task> {
                         finals,
                         feedback_pct: mean_se(&feedback),
                         steps,
-                        seeds_learned: seeds.iter().filter(|r| learned(r)).count(),
+                        seeds_learned: pacing.iter().filter(|r| r.learned).count(),
                         frozen_pct: mean_se(&frozen),
                         longest_flood_after_2k: longest,
+                        runs: pacing,
                     }
                 })
                 .collect(),

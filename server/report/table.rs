@@ -182,6 +182,37 @@ pub fn fig3_table(tasks: &[Fig3Task]) -> String {
             out.push_str(&row);
         }
         out.push_str(&dref_against_matched(task));
+        out.push_str(&per_run_pacing(task));
+    }
+    out
+}
+
+/// Per run of each row that asks by a rule: whether it learnt, its feedback, its share of
+/// frozen episodes and its longest flood after the first 2k steps.
+fn per_run_pacing(task: &Fig3Task) -> String {
+    let mut out = String::new();
+    for m in &task.methods {
+        if !Fig3Method::parse(&m.method).is_none_or(Fig3Method::is_dref) || m.runs.is_empty() {
+            continue;
+        }
+        let _ = write!(
+            out,
+            "\n{}, per run:\n\n| seed | learns | feedback | frozen | longest flood after 2k |\n\
+             |---|---|---:|---:|---:|\n",
+            display_name(&m.method)
+        );
+        for r in &m.runs {
+            let (flood, exact) = r.longest_flood_after_2k;
+            let _ = writeln!(
+                out,
+                "| {} | {} | {:.2} % | {:.1} % | {}{flood} |",
+                r.seed,
+                if r.learned { "yes" } else { "no" },
+                r.feedback_pct,
+                r.frozen_pct,
+                if exact { "" } else { ">= " },
+            );
+        }
     }
     out
 }

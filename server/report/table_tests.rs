@@ -19,6 +19,7 @@ fn fig3_row(method: &str, final_return: MeanSe, feedback: MeanSe) -> Fig3Row {
         seeds_learned: 0,
         frozen_pct: ms(0.0, 0.0, final_return.n),
         longest_flood_after_2k: (0, true),
+        runs: Vec::new(),
     }
 }
 
@@ -76,6 +77,44 @@ DREF above EF-6.2% (its rate): one-sided exact Mann-Whitney U = 20.0 over 5 and 
         text.ends_with(expected),
         "got:\n{text}\nwanted the end:\n{expected}"
     );
+}
+
+#[test]
+fn report_fig3_table_lists_each_dref_runs_pacing() {
+    use crate::report::aggregate::RunPacing;
+    let mut dref = fig3_row("dref", ms(9.0, 1.0, 2), ms(5.0, 0.0, 2));
+    dref.runs = vec![
+        RunPacing {
+            seed: 0,
+            learned: true,
+            feedback_pct: 5.02,
+            frozen_pct: 0.0,
+            longest_flood_after_2k: (2, true),
+        },
+        RunPacing {
+            seed: 3,
+            learned: false,
+            feedback_pct: 2.61,
+            frozen_pct: 41.25,
+            longest_flood_after_2k: (140, false),
+        },
+    ];
+    let mut sac = fig3_row("sac", ms(5.0, 1.0, 2), ms(0.0, 0.0, 2));
+    sac.runs = dref.runs.clone();
+    let text = fig3_table(&[Fig3Task {
+        task: Task::Placing,
+        methods: vec![dref, sac],
+    }]);
+    let expected = "\
+DREF, per run:
+
+| seed | learns | feedback | frozen | longest flood after 2k |
+|---|---|---:|---:|---:|
+| 0 | yes | 5.02 % | 0.0 % | 2 |
+| 3 | no | 2.61 % | 41.2 % | >= 140 |
+";
+    assert!(text.ends_with(expected), "{text}");
+    assert!(!text.contains("SAC, per run"), "{text}");
 }
 
 #[test]
