@@ -191,6 +191,10 @@ pub struct Settings {
     /// With a ceiling: at most about this many queries in a row [default 20].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub feedback_burst: Option<u32>,
+    /// With a ceiling: let the rate run from this floor (recent answers all "good") up to
+    /// `max_feedback_rate` (all "bad"); 0: a fixed rate [default 0].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_feedback_rate: Option<f64>,
     /// The learner stores `reward_scale * r`; reported returns keep the env's scale.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reward_scale: Option<f32>,
@@ -492,6 +496,9 @@ impl Settings {
                         c.query_rule
                             .ceiling
                             .map_or(DEFAULT_CEILING.burst, |x| x.burst),
+                    ),
+                    min_feedback_rate: Some(
+                        c.query_rule.ceiling.and_then(|x| x.floor).unwrap_or(0.0),
                     ),
                     reward_scale: Some(c.reward_scale),
                     max_queries_per_minute: Some(0),

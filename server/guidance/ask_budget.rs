@@ -5,14 +5,31 @@
 //! `burst / (1 - rate)` in a row. How full the bucket is also narrows whom it asks: with a full
 //! bucket the k + 1 best-ranked states may ask, with the last token only the best one, so a
 //! scarce budget goes to the states the UCB ranks highest.
+//!
+//! Optionally (`min_feedback_rate`, off by default) the rate follows the answers themselves:
+//! from the floor when the trainer's recent answers were all "good" to the ceiling when they were
+//! all "bad", so a person is asked more while the robot keeps doing wrong and less once it does
+//! right. The answers are one of DREF's own inputs, so the rule stays DREF.
+
+use std::collections::VecDeque;
 
 use serde::{Deserialize, Serialize};
 
+/// Answers behind an answer-driven rate.
+pub const RATE_ANSWERS: usize = 50;
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AskBudget {
+    /// The ceiling on the rate.
     rate: f64,
     burst: f64,
     tokens: f64,
+    /// The floor of an answer-driven rate (`None`: the rate is the ceiling, fixed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    floor: Option<f64>,
+    /// Whether each of the last [`RATE_ANSWERS`] answers was "bad" (H < 0), oldest first.
+    #[serde(default, skip_serializing_if = "VecDeque::is_empty")]
+    recent_bad: VecDeque<bool>,
 }
 
 impl AskBudget {
@@ -23,12 +40,33 @@ impl AskBudget {
             rate,
             burst,
             tokens: burst,
+            floor: None,
+            recent_bad: VecDeque::new(),
         }
     }
 
-    /// One environment step passes: the bucket earns `rate` of a query.
+    /// The same bucket with a rate between `floor` and its ceiling, by the share of "bad"
+    /// answers among the last [`RATE_ANSWERS`] (the ceiling before any answer).
+    pub fn following_answers(mut self, floor: f64) -> Self {
+        self.floor = Some(floor.min(self.rate));
+        self
+    }
+
+    /// The share of steps the bucket earns a query for now.
+    pub fn current_rate(&self) -> f64 {
+        match self.floor {
+            None => self.rate,
+            Some(_) if self.recent_bad.is_empty() => self.rate,
+            Some(floor) => {
+                let bad = self.recent_bad.iter().filter(|b| **b).count() as f64;
+                floor + (self.rate - floor) * bad / self.recent_bad.len() as f64
+            }
+        }
+    }
+
+    /// One environment step passes: the bucket earns the current rate's share of a query.
     pub fn tick(&mut self) {
-        self.tokens = (self.tokens + self.rate).min(self.burst);
+        self.tokens = (self.tokens + self.current_rate()).min(self.burst);
     }
 
     /// Whether a whole query is in the bucket.
@@ -43,9 +81,15 @@ impl AskBudget {
         (k as f64 * spare).floor() as usize
     }
 
-    /// A query was asked.
-    pub fn spend(&mut self) {
+    /// A query was asked and answered `h`.
+    pub fn spend(&mut self, h: f32) {
         self.tokens -= 1.0;
+        if self.floor.is_some() {
+            self.recent_bad.push_back(h < 0.0);
+            if self.recent_bad.len() > RATE_ANSWERS {
+                self.recent_bad.pop_front();
+            }
+        }
     }
 }
 
@@ -60,7 +104,7 @@ mod tests {
         for _ in 0..100_000 {
             budget.tick();
             if budget.can_ask() {
-                budget.spend();
+                budget.spend(1.0);
                 asked += 1;
                 streak += 1;
                 longest = longest.max(streak);
@@ -82,7 +126,7 @@ mod tests {
             "a full bucket admits the top k + 1"
         );
         for _ in 0..10 {
-            budget.spend();
+            budget.spend(-1.0);
         }
         assert!(budget.can_ask());
         assert_eq!(
@@ -90,7 +134,7 @@ mod tests {
             0,
             "the last token goes to the best state"
         );
-        budget.spend();
+        budget.spend(-1.0);
         assert!(!budget.can_ask());
         // A query's worth again after 1 / rate steps (one more for rounding of 0.1).
         for _ in 0..9 {
@@ -100,5 +144,36 @@ mod tests {
         budget.tick();
         budget.tick();
         assert!(budget.can_ask());
+    }
+
+    #[test]
+    fn an_answer_driven_rate_runs_from_the_floor_to_the_ceiling() {
+        let mut budget = AskBudget::new(0.1, 20).following_answers(0.02);
+        assert_eq!(budget.current_rate(), 0.1, "the ceiling before any answer");
+        for _ in 0..RATE_ANSWERS {
+            budget.spend(1.0);
+        }
+        assert!(
+            (budget.current_rate() - 0.02).abs() < 1e-12,
+            "all good: the floor"
+        );
+        for _ in 0..RATE_ANSWERS / 2 {
+            budget.spend(-1.0);
+        }
+        assert!(
+            (budget.current_rate() - 0.06).abs() < 1e-12,
+            "half bad: half way"
+        );
+        for _ in 0..RATE_ANSWERS {
+            budget.spend(-1.0);
+        }
+        assert!(
+            (budget.current_rate() - 0.1).abs() < 1e-12,
+            "all bad: the ceiling"
+        );
+        // "No feedback" (0) counts as not bad; a fixed bucket ignores answers.
+        let mut fixed = AskBudget::new(0.05, 20);
+        fixed.spend(-1.0);
+        assert_eq!(fixed.current_rate(), 0.05);
     }
 }

@@ -41,11 +41,14 @@ pub struct QueryRuleConfig {
     pub ceiling: Option<FeedbackCeiling>,
 }
 
-/// At most `rate` of the steps asked in the long run, at most about `burst` in a row.
+/// At most `rate` of the steps asked in the long run, at most about `burst` in a row; with a
+/// `floor`, the rate runs between it and `rate` by the share of recent "bad" answers.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FeedbackCeiling {
     pub rate: f64,
     pub burst: u32,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub floor: Option<f64>,
 }
 
 /// The product DREF's window: about 1,000 steps is many Placing and Reaching episodes and one or
@@ -57,6 +60,7 @@ pub const DEFAULT_RANK_WINDOW: usize = 1_000;
 pub const DEFAULT_CEILING: FeedbackCeiling = FeedbackCeiling {
     rate: 0.05,
     burst: 20,
+    floor: None,
 };
 
 impl QueryRuleConfig {
@@ -96,7 +100,7 @@ impl QueryRuleConfig {
             rule = rule.ranked_among_recent(self.rank_window);
         }
         if let Some(ceiling) = self.ceiling {
-            rule = rule.with_ceiling(ceiling.rate, ceiling.burst);
+            rule = rule.with_ceiling(ceiling.rate, ceiling.burst, ceiling.floor);
         }
         rule
     }

@@ -80,9 +80,14 @@ impl QueryRule {
         self
     }
 
-    /// Ask on at most `rate` of the steps, at most about `burst` in a row.
-    pub fn with_ceiling(mut self, rate: f64, burst: u32) -> Self {
-        self.budget = Some(AskBudget::new(rate, burst));
+    /// Ask on at most `rate` of the steps, at most about `burst` in a row; with `floor`, at a
+    /// rate between it and `rate` by the share of recent "bad" answers.
+    pub fn with_ceiling(mut self, rate: f64, burst: u32, floor: Option<f64>) -> Self {
+        let budget = AskBudget::new(rate, burst);
+        self.budget = Some(match floor {
+            Some(floor) => budget.following_answers(floor),
+            None => budget,
+        });
         self
     }
 
@@ -148,7 +153,7 @@ impl QueryRule {
     /// of the ceiling's budget.
     pub fn record(&mut self, g: AbstractState, h: f32, h_hat: f32) {
         if let Some(budget) = &mut self.budget {
-            budget.spend();
+            budget.spend(h);
         }
         let diff = f64::from(h) - f64::from(h_hat);
         let error = match self.form {
@@ -370,7 +375,7 @@ mod tests {
         let mut authors = QueryRule::new(0.1, 2, UcbForm::Authors);
         let mut capped = QueryRule::new(0.1, 2, UcbForm::Authors)
             .ranked_among_recent(1_000)
-            .with_ceiling(0.05, 20);
+            .with_ceiling(0.05, 20, None);
         let run = |rule: &mut QueryRule| {
             let (mut asked, mut streak, mut longest) = (0u32, 0u32, 0u32);
             for step in 0..20_000u32 {
@@ -396,7 +401,7 @@ mod tests {
     fn a_rule_with_window_and_ceiling_survives_a_serde_round_trip() {
         let mut rule = QueryRule::new(0.2, 4, UcbForm::Authors)
             .ranked_among_recent(50)
-            .with_ceiling(0.05, 20);
+            .with_ceiling(0.05, 20, None);
         for g in 0..30 {
             if rule.visit(AbstractState(g % 7)) {
                 rule.record(AbstractState(g % 7), 1.0, 0.0);

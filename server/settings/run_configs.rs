@@ -102,6 +102,7 @@ impl Settings {
             rank_window,
             max_feedback_rate,
             feedback_burst,
+            min_feedback_rate,
             reward_scale,
             max_queries_per_minute,
             profile,
@@ -207,6 +208,7 @@ impl Settings {
             *rank_window,
             *max_feedback_rate,
             *feedback_burst,
+            *min_feedback_rate,
         )?;
         set_positive(&mut config.reward_scale, *reward_scale, "reward_scale")?;
         if let Some(n) = max_queries_per_minute.filter(|n| *n > 0) {
@@ -306,6 +308,7 @@ impl Settings {
             rank_window,
             max_feedback_rate,
             feedback_burst,
+            min_feedback_rate,
             reward_scale,
             max_queries_per_minute,
             profile,
@@ -352,6 +355,7 @@ impl Settings {
             ("rank_window", rank_window.is_some()),
             ("max_feedback_rate", max_feedback_rate.is_some()),
             ("feedback_burst", feedback_burst.is_some()),
+            ("min_feedback_rate", min_feedback_rate.is_some()),
             ("reward_scale", reward_scale.is_some()),
             ("max_queries_per_minute", max_queries_per_minute.is_some()),
             ("profile", profile.is_some()),
@@ -429,6 +433,7 @@ fn apply_query_pacing(
     rank_window: Option<usize>,
     max_feedback_rate: Option<f64>,
     feedback_burst: Option<u32>,
+    min_feedback_rate: Option<f64>,
 ) -> Result<(), String> {
     if let Some(w) = rank_window {
         rule.rank_window = w;
@@ -437,13 +442,36 @@ fn apply_query_pacing(
         None => {}
         Some(0.0) => rule.ceiling = None,
         Some(r) if r.is_finite() && r > 0.0 && r <= 1.0 => {
-            let burst = rule.ceiling.map_or(DEFAULT_CEILING.burst, |c| c.burst);
-            rule.ceiling = Some(FeedbackCeiling { rate: r, burst });
+            let (burst, floor) = rule
+                .ceiling
+                .map_or((DEFAULT_CEILING.burst, None), |c| (c.burst, c.floor));
+            rule.ceiling = Some(FeedbackCeiling {
+                rate: r,
+                burst,
+                floor,
+            });
         }
         Some(r) => {
             return Err(format!(
                 "max_feedback_rate: expected a share of steps in (0, 1], or 0 for no ceiling, got {r}"
             ));
+        }
+    }
+    match (min_feedback_rate, &mut rule.ceiling) {
+        (None, _) => {}
+        (Some(0.0), Some(c)) => c.floor = None,
+        (Some(0.0), None) => {}
+        (Some(f), Some(c)) if f.is_finite() && f > 0.0 && f <= c.rate => c.floor = Some(f),
+        (Some(f), Some(c)) => {
+            return Err(format!(
+                "min_feedback_rate: expected a share of steps in (0, max_feedback_rate = {}], or 0 for a fixed rate, got {f}",
+                c.rate
+            ));
+        }
+        (Some(_), None) => {
+            return Err(
+                "min_feedback_rate: the rule has no ceiling; set max_feedback_rate too".into(),
+            );
         }
     }
     if let Some(b) = feedback_burst {

@@ -429,4 +429,22 @@ fn the_products_dref_and_the_authors_differ_only_in_their_three_switches() {
         .evaluative(Task::Placing, EvaluativeMethod::DrefAuthors, 0)
         .unwrap_err();
     assert!(no_ceiling.contains("no ceiling"), "{no_ceiling}");
+    // An answer-driven rate: a floor under the ceiling, checked against it.
+    let following =
+        Settings::from_pairs([("max_feedback_rate", "0.1"), ("min_feedback_rate", "0.02")])
+            .unwrap()
+            .evaluative(Task::Placing, EvaluativeMethod::Dref, 0)
+            .unwrap();
+    assert_eq!(
+        following
+            .query_rule
+            .ceiling
+            .map(|c| (c.rate, c.burst, c.floor)),
+        Some((0.1, 20, Some(0.02)))
+    );
+    let above = Settings::from_pairs([("min_feedback_rate", "0.2")])
+        .unwrap()
+        .evaluative(Task::Placing, EvaluativeMethod::Dref, 0)
+        .unwrap_err();
+    assert!(above.contains("min_feedback_rate"), "{above}");
 }
