@@ -100,12 +100,13 @@ fn fig3_report_writes_table_svg_and_png_with_feedback_in_the_legend() {
     assert!(table.contains("| 1.17 | 34.1k (6.3 %) |"), "{table}");
     assert!(table.contains("| EF-8.4% (DREF's rate) |"), "{table}");
     assert!(table.contains("| 0.23 | 10.1k |"), "{table}");
-    // Every task has its six methods.
+    // Every task has its six methods, and DREF's per-run table its five seeds.
     assert_eq!(
         table.matches("\n| ").count(),
-        3 * 7,
-        "header + 6 rows per task:\n{table}"
+        3 * (7 + 6),
+        "header + 6 rows per task, header + 5 runs of DREF per task:\n{table}"
     );
+    assert_eq!(table.matches("DREF, per run:").count(), 3, "{table}");
 }
 
 #[test]
