@@ -16,15 +16,15 @@ run() { nice -n 10 "$bin" --threads 1 reproduce fig3 --jobs 1 "$@"; }
 
 lane_a() {
   run --tasks reaching --seeds 10 --methods dref,ef-dref --out "$out/fig3"
+  # Reaching's stalls under the product rule (docs/results/fig3/README.md): its rule without
+  # the mask, and the authors' rule with it.
+  run --tasks reaching --seeds 10 --methods dref --set human_critic_mask=false --out "$out/ablation-unmasked"
+  run --tasks reaching --seeds 10 --methods dref-masked --out "$out/fig3"
   # Seeds 5-9 of the rows reused from the committed 5 seeds (copy those into "$out/fig3" first).
   run --tasks reaching,placing --seeds 10 --methods ef-100,sac,dref-authors --out "$out/fig3"
   run --tasks placing --seeds 10 --methods dref-masked --out "$out/fig3"
   run --tasks placing --seeds 10 --methods dref-authors --set rank_window=1000 --out "$out/ablation-window"
   run --tasks placing --seeds 10 --methods dref-authors --set max_feedback_rate=0.05 --out "$out/ablation-ceiling"
-  # Reaching's stalls under the product rule (docs/results/fig3/README.md): its rule without
-  # the mask, and the authors' rule with it.
-  run --tasks reaching --seeds 10 --methods dref --set human_critic_mask=false --out "$out/ablation-unmasked"
-  run --tasks reaching --seeds 10 --methods dref-masked --out "$out/fig3"
   # The ceiling's level (docs/results/dref-ablation/README.md: Placing seed 1 learns at 10 %).
   run --tasks placing --seeds 10 --methods dref --set max_feedback_rate=0.1 --out "$out/ablation-ceiling-10"
 }
