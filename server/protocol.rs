@@ -137,7 +137,7 @@ pub struct RulePacing {
 impl RulePacing {
     /// Count a finished episode.
     pub fn episode(&mut self, e: &crate::guidance::evaluative_run::EpisodeRecord) {
-        use crate::guidance::evaluative_run::{FROZEN_AFTER_STEPS, FROZEN_FAILED_EPISODES};
+        use crate::guidance::ask_pacing::{FROZEN_FAILED_EPISODES, is_frozen};
         self.episodes += 1;
         self.longest_flood = e.longest_flood;
         self.steps_since_query = e.steps_since_query;
@@ -146,10 +146,7 @@ impl RulePacing {
         if recent.len() > FROZEN_FAILED_EPISODES {
             recent.pop_front();
         }
-        if recent.len() == FROZEN_FAILED_EPISODES
-            && recent.iter().all(|s| !s)
-            && e.steps_since_query >= FROZEN_AFTER_STEPS
-        {
+        if is_frozen(e.steps_since_query, recent.iter().copied()) {
             self.frozen_episodes += 1;
         }
     }
@@ -319,7 +316,8 @@ mod tests {
 
     #[test]
     fn a_sessions_pacing_counts_frozen_episodes_as_the_grid_report_does() {
-        use crate::guidance::evaluative_run::{EpisodeRecord, frozen_share};
+        use crate::guidance::ask_pacing::frozen_share;
+        use crate::guidance::evaluative_run::EpisodeRecord;
         use crate::sim::Outcome;
         // Twelve failed episodes 1,000 steps apart; the rule last asked at step 2,999.
         let records: Vec<EpisodeRecord> = (1..=12u64)

@@ -14,6 +14,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
+use super::ask_pacing::AskPacing;
 use super::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
 use super::expert_oracle::OracleConfig;
 use super::feedback_schedule::{EvaluativeMethod, FeedbackSchedule};
@@ -311,69 +312,6 @@ pub struct EpisodeRecord {
     pub longest_flood: u64,
 }
 
-/// What a person sees of a rule's pacing: the longest stretches of consecutive asked steps
-/// ("floods") and when it last asked (a long silence while the learner fails is a "freeze").
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct AskPacing {
-    /// The step of the last query, if any.
-    pub last_query: Option<u64>,
-    /// Consecutive asked steps up to now.
-    pub flood: u64,
-    /// The longest stretch of consecutive asked steps.
-    pub longest_flood: u64,
-    /// The longest stretch among the steps from [`AskPacing::SETTLED_AFTER`] on (a new
-    /// learner's first steps are all new states, so some flooding there is expected).
-    pub longest_flood_settled: u64,
-}
-
-impl AskPacing {
-    /// Steps after which a flood counts against the rule (the "after its first 2k").
-    pub const SETTLED_AFTER: u64 = 2_000;
-
-    /// Step `step` (0-based) asked or not.
-    pub fn step(&mut self, step: u64, asked: bool) {
-        if !asked {
-            self.flood = 0;
-            return;
-        }
-        self.last_query = Some(step);
-        self.flood += 1;
-        self.longest_flood = self.longest_flood.max(self.flood);
-        if step >= Self::SETTLED_AFTER {
-            let settled = self.flood.min(step + 1 - Self::SETTLED_AFTER);
-            self.longest_flood_settled = self.longest_flood_settled.max(settled);
-        }
-    }
-
-    /// Steps since the last query after `steps` steps.
-    pub fn steps_since_query(&self, steps: u64) -> u64 {
-        self.last_query.map_or(steps, |s| steps - 1 - s)
-    }
-}
-
-/// Steps without a query after which a rule whose learner keeps failing counts as frozen.
-pub const FROZEN_AFTER_STEPS: u64 = 10_000;
-/// Episodes that must all have failed for a silent rule to count as frozen.
-pub const FROZEN_FAILED_EPISODES: usize = 10;
-
-/// The share of episodes after which the rule had not asked for [`FROZEN_AFTER_STEPS`] while
-/// the last [`FROZEN_FAILED_EPISODES`] episodes all failed (the "frozen"), over the
-/// episodes in order, each as (steps since the last query at its end, whether it succeeded).
-pub fn frozen_share(episodes: &[(u64, bool)]) -> f64 {
-    if episodes.is_empty() {
-        return 0.0;
-    }
-    let frozen = (FROZEN_FAILED_EPISODES - 1..episodes.len())
-        .filter(|&i| {
-            episodes[i].0 >= FROZEN_AFTER_STEPS
-                && episodes[i + 1 - FROZEN_FAILED_EPISODES..=i]
-                    .iter()
-                    .all(|&(_, success)| !success)
-        })
-        .count();
-    frozen as f64 / episodes.len() as f64
-}
-
 /// What one call of [`EvaluativeRun::step`] did.
 #[derive(Clone, Debug)]
 pub struct StepReport {
@@ -402,6 +340,8 @@ pub struct EvaluativeRun {
     episode_seed: u64,
     obs: Vec<f32>,
     action: Vec<f32>,
+    /// The action as the human critic is shown it for H_hat (scaled as run; a workspace).
+    shown_action: Vec<f32>,
     steps: u64,
     episodes: u64,
     episode_return: f64,
@@ -457,6 +397,7 @@ impl EvaluativeRun {
             episode_seed,
             obs,
             action: vec![0.0; act_dim],
+            shown_action: vec![0.0; act_dim],
             steps: 0,
             episodes: 0,
             episode_return: 0.0,
@@ -695,8 +636,10 @@ impl EvaluativeRun {
         if scale == 1.0 {
             return self.learner.human_estimate(&self.obs, &self.action);
         }
-        let shown: Vec<f32> = self.action.iter().map(|a| a * scale).collect();
-        self.learner.human_estimate(&self.obs, &shown)
+        for (shown, a) in self.shown_action.iter_mut().zip(&self.action) {
+            *shown = a * scale;
+        }
+        self.learner.human_estimate(&self.obs, &self.shown_action)
     }
 }
 

@@ -4,6 +4,7 @@
 //! - `query_rule`: DREF's UCB rule over abstract states (Eq. 1-2 and the authors' form).
 //! - `recent_visits`, `ask_budget`: the product DREF's rank among recent visits and its ceiling on
 //!   the rate of queries (`docs/dref.md`); the authors' rule uses neither.
+//! - `ask_pacing`: a rule's floods and freezes, as runs, sessions and grids report them.
 //! - `feedback_schedule`: which steps ask, per method (DREF, EF-p%, SAC).
 //! - `evaluative_trainer`: the `EvaluativeTrainer` trait (synthetic oracle or a person) and H.
 //! - `expert_oracle`: the synthetic trainer, a SAC expert's critic judging the learner's action.
@@ -19,6 +20,7 @@
 
 pub mod agreement;
 pub mod ask_budget;
+pub mod ask_pacing;
 pub mod drpl;
 pub mod evaluative_run;
 pub mod evaluative_trainer;

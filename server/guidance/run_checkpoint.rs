@@ -12,7 +12,8 @@
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use super::{AskPacing, EvaluativeRun, EvaluativeRunConfig, EvaluativeTrainer};
+use super::{EvaluativeRun, EvaluativeRunConfig, EvaluativeTrainer};
+use crate::guidance::ask_pacing::AskPacing;
 use crate::guidance::feedback_schedule::FeedbackSchedule;
 use crate::guidance::query_rule::QueryRule;
 use crate::rl::Sac;
@@ -211,6 +212,7 @@ impl EvaluativeRun {
             episode_seed: state.episode_seed,
             obs,
             action: vec![0.0; act_dim],
+            shown_action: vec![0.0; act_dim],
             steps: state.steps,
             episodes: state.episodes,
             episode_return: 0.0,

@@ -12,7 +12,7 @@ use serde::Serialize;
 use super::methods::{order_key, task_rank};
 use super::run_files::{PrefsRun, TrainRun};
 use super::stats::{MeanSe, interpolate, linspace, mean_se};
-use crate::guidance::evaluative_run::{AskPacing, frozen_share};
+use crate::guidance::ask_pacing::{AskPacing, frozen_share};
 use crate::sim::{Outcome, Task};
 
 /// Points on the common step grid of a Figure 3 curve (every 1 % of training).
