@@ -195,6 +195,11 @@ pub struct Settings {
     /// `max_feedback_rate` (all "bad"); 0: a fixed rate [default 0].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min_feedback_rate: Option<f64>,
+    /// After this many steps without a query, rank the current state among the states visited
+    /// during that silence instead of among every state with feedback, until the rule asks
+    /// again; 0: never, the authors' [default 0].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wake_after: Option<u64>,
     /// The learner stores `reward_scale * r`; reported returns keep the env's scale.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reward_scale: Option<f32>,
@@ -500,6 +505,7 @@ impl Settings {
                     min_feedback_rate: Some(
                         c.query_rule.ceiling.and_then(|x| x.floor).unwrap_or(0.0),
                     ),
+                    wake_after: Some(c.query_rule.wake_after),
                     reward_scale: Some(c.reward_scale),
                     max_queries_per_minute: Some(0),
                     profile: Some(Profile::Head),

@@ -40,6 +40,11 @@ pub struct QueryRuleConfig {
     /// A ceiling on the share of steps asked; `None`: none (the authors').
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ceiling: Option<FeedbackCeiling>,
+    /// After this many steps without a query, rank among the states visited during the
+    /// silence until the rule asks; 0: never (the authors'). Configs written before it existed
+    /// read as 0.
+    #[serde(default)]
+    pub wake_after: u64,
 }
 
 /// At most `rate` of the steps asked in the long run, at most about `burst` in a row; with a
@@ -78,6 +83,7 @@ impl QueryRuleConfig {
             form: UcbForm::Authors,
             rank_window: 0,
             ceiling: None,
+            wake_after: 0,
         }
     }
 
@@ -102,6 +108,9 @@ impl QueryRuleConfig {
         }
         if let Some(ceiling) = self.ceiling {
             rule = rule.with_ceiling(ceiling.rate, ceiling.burst, ceiling.floor);
+        }
+        if self.wake_after > 0 {
+            rule = rule.waking_after(self.wake_after);
         }
         rule
     }

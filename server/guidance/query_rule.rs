@@ -12,7 +12,10 @@
 //! and ask iff at most k of them score strictly higher. The product's DREF (`docs/dref.md`)
 //! keeps the score and changes whom it competes with and how often it may win: it ranks among
 //! the states visited in the last W steps ([`RecentVisits`]) and asks within a ceiling
-//! ([`AskBudget`]); both are off in the authors' rule.
+//! ([`AskBudget`]); both are off in the authors' rule. A third change keeps the authors' ranking
+//! and only wakes it: after W steps without a query, the current state is ranked among the
+//! states visited during that silence ([`SilenceWake`]), so the rule cannot stay silent while
+//! the learner is somewhere else than where its best-ranked states are.
 
 use std::collections::BTreeMap;
 
@@ -58,6 +61,36 @@ pub struct QueryRule {
     /// A ceiling on the rate of queries (`None`: the authors', no ceiling).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     budget: Option<AskBudget>,
+    /// Rank among the states of a long silence once it has lasted (`None`: never, the authors').
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    wake: Option<SilenceWake>,
+}
+
+/// The steps since the rule last asked, and the states visited in the last `after` of them:
+/// once `after` steps have passed without a query, the rule ranks among those states instead
+/// of among every state with feedback, until it asks again. The authors' ranking freezes
+/// because the states that outrank the learner's current ones are states it no longer visits;
+/// ranked among the silence's own states, one of the best k + 1 of them asks at its next visit.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SilenceWake {
+    after: u64,
+    silent: u64,
+    during: RecentVisits,
+}
+
+impl SilenceWake {
+    fn new(after: u64) -> Self {
+        let after = after.max(1);
+        Self {
+            after,
+            silent: 0,
+            during: RecentVisits::new(usize::try_from(after).unwrap_or(usize::MAX)),
+        }
+    }
+
+    fn awake(&self) -> bool {
+        self.silent >= self.after
+    }
 }
 
 impl QueryRule {
@@ -71,7 +104,20 @@ impl QueryRule {
             stats: BTreeMap::new(),
             recent: None,
             budget: None,
+            wake: None,
         }
+    }
+
+    /// After `steps` without a query, rank among the states visited during the silence until
+    /// the next query (the authors' ranking otherwise).
+    pub fn waking_after(mut self, steps: u64) -> Self {
+        self.wake = Some(SilenceWake::new(steps));
+        self
+    }
+
+    /// Steps since the rule last asked, when it wakes from silences (else `None`).
+    pub fn silent_steps(&self) -> Option<u64> {
+        self.wake.as_ref().map(|w| w.silent)
     }
 
     /// Rank among the states visited in the last `window` steps.
@@ -129,9 +175,12 @@ impl QueryRule {
         };
         let own = self.score(g);
         let higher_than = |other: &AbstractState| self.score(*other) > own;
-        match &self.recent {
-            None => count_at_most(self.stats.keys().filter(|o| higher_than(o)), k),
-            Some(recent) => count_at_most(recent.states().filter(higher_than), k),
+        match (&self.recent, &self.wake) {
+            (Some(recent), _) => count_at_most(recent.states().filter(higher_than), k),
+            (None, Some(wake)) if wake.awake() => {
+                count_at_most(wake.during.states().filter(higher_than), k)
+            }
+            (None, _) => count_at_most(self.stats.keys().filter(|o| higher_than(o)), k),
         }
     }
 
@@ -145,6 +194,10 @@ impl QueryRule {
         if let Some(budget) = &mut self.budget {
             budget.tick();
         }
+        if let Some(wake) = &mut self.wake {
+            wake.during.push(g);
+            wake.silent += 1;
+        }
         self.should_query(g)
     }
 
@@ -154,6 +207,9 @@ impl QueryRule {
     pub fn record(&mut self, g: AbstractState, h: f32, h_hat: f32) {
         if let Some(budget) = &mut self.budget {
             budget.spend(h);
+        }
+        if let Some(wake) = &mut self.wake {
+            wake.silent = 0;
         }
         let diff = f64::from(h) - f64::from(h_hat);
         let error = match self.form {
@@ -347,6 +403,49 @@ mod tests {
     }
 
     #[test]
+    fn a_waking_rule_keeps_the_authors_ranking_until_a_silence_and_then_asks_once() {
+        let mut rule = QueryRule::new(0.1, 2, UcbForm::Authors).waking_after(1_000);
+        let now = frozen_history(&mut rule);
+        let mut asked_at = Vec::new();
+        for step in 1..=3_500u64 {
+            if rule.visit(now) {
+                rule.record(now, 1.0, 1.0);
+                asked_at.push(step);
+            }
+        }
+        // Silent as the authors' rule for 999 steps, then one query per 1,000 steps: the
+        // silence's only state is its best, and the answer ends the silence.
+        assert_eq!(asked_at, [1_000, 2_000, 3_000]);
+        assert_eq!(rule.silent_steps(), Some(500));
+    }
+
+    #[test]
+    fn a_waking_rule_asks_the_best_state_of_the_silence() {
+        let (good, bad) = (AbstractState(20), AbstractState(21));
+        let mut rule = QueryRule::new(0.1, 0, UcbForm::Authors).waking_after(10);
+        frozen_history(&mut rule);
+        rule.record(good, 1.0, 1.0);
+        rule.record(good, 1.0, 1.0);
+        rule.record(bad, 1.0, -1.0);
+        rule.record(bad, 1.0, -1.0);
+        for _ in 0..5 {
+            assert!(
+                !rule.visit(bad),
+                "ranked among every answered state: not asked"
+            );
+        }
+        for _ in 0..4 {
+            assert!(!rule.visit(good));
+        }
+        // The tenth silent step: `bad` outranks `good` among the silence's states.
+        assert!(
+            !rule.visit(good),
+            "k = 0: only the best ranked state of the silence asks"
+        );
+        assert!(rule.visit(bad));
+    }
+
+    #[test]
     fn the_recent_rank_still_prefers_the_worse_predicted_of_the_visited_states() {
         let (good, bad) = (AbstractState(1), AbstractState(2));
         let mut rule = QueryRule::new(0.01, 0, UcbForm::Authors).ranked_among_recent(10);
@@ -401,7 +500,8 @@ mod tests {
     fn a_rule_with_window_and_ceiling_survives_a_serde_round_trip() {
         let mut rule = QueryRule::new(0.2, 4, UcbForm::Authors)
             .ranked_among_recent(50)
-            .with_ceiling(0.05, 20, None);
+            .with_ceiling(0.05, 20, None)
+            .waking_after(7);
         for g in 0..30 {
             if rule.visit(AbstractState(g % 7)) {
                 rule.record(AbstractState(g % 7), 1.0, 0.0);

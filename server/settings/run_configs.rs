@@ -103,6 +103,7 @@ impl Settings {
             max_feedback_rate,
             feedback_burst,
             min_feedback_rate,
+            wake_after,
             reward_scale,
             max_queries_per_minute,
             profile,
@@ -210,6 +211,9 @@ impl Settings {
             *feedback_burst,
             *min_feedback_rate,
         )?;
+        if let Some(steps) = wake_after {
+            config.query_rule.wake_after = *steps;
+        }
         set_positive(&mut config.reward_scale, *reward_scale, "reward_scale")?;
         if let Some(n) = max_queries_per_minute.filter(|n| *n > 0) {
             let pace_hz = self.session()?.pace_hz;
@@ -309,6 +313,7 @@ impl Settings {
             max_feedback_rate,
             feedback_burst,
             min_feedback_rate,
+            wake_after,
             reward_scale,
             max_queries_per_minute,
             profile,
@@ -356,6 +361,7 @@ impl Settings {
             ("max_feedback_rate", max_feedback_rate.is_some()),
             ("feedback_burst", feedback_burst.is_some()),
             ("min_feedback_rate", min_feedback_rate.is_some()),
+            ("wake_after", wake_after.is_some()),
             ("reward_scale", reward_scale.is_some()),
             ("max_queries_per_minute", max_queries_per_minute.is_some()),
             ("profile", profile.is_some()),

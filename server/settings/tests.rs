@@ -448,3 +448,24 @@ fn the_products_dref_and_the_authors_differ_only_in_their_three_switches() {
         .unwrap_err();
     assert!(above.contains("min_feedback_rate"), "{above}");
 }
+
+#[test]
+fn the_silence_wake_is_a_setting_of_its_own_and_off_by_default() {
+    for method in [EvaluativeMethod::Dref, EvaluativeMethod::DrefAuthors] {
+        let plain = Settings::default()
+            .evaluative(Task::Placing, method, 0)
+            .unwrap();
+        assert_eq!(plain.query_rule.wake_after, 0, "{method:?}");
+    }
+    let waking = Settings::from_pairs([("wake_after", "2000"), ("rank_window", "0")])
+        .unwrap()
+        .evaluative(Task::Placing, EvaluativeMethod::Dref, 0)
+        .unwrap();
+    assert_eq!(
+        (waking.query_rule.wake_after, waking.query_rule.rank_window),
+        (2000, 0)
+    );
+    assert_eq!(waking.query_rule.build().silent_steps(), Some(0));
+    let not_a_number = Settings::from_pairs([("wake_after", "soon")]).unwrap_err();
+    assert!(not_a_number.contains("wake_after"), "{not_a_number}");
+}
