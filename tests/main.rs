@@ -29,6 +29,7 @@ mod rl_gradients;
 mod rl_no_alloc;
 mod sac;
 mod sac_no_alloc;
+mod security_headers;
 mod session_recording;
 mod slurm;
 mod store;

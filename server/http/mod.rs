@@ -8,11 +8,13 @@
 //! - `datasets`: a session's Parquet table, posterior and policy files.
 //! - `tasks`, `openapi`: self-description.
 //! - `auth`, `error`: the bearer check and the JSON error shape.
+//! - `security_headers`: the CSP, referrer and MIME-sniffing headers on every response.
 
 pub mod auth;
 pub mod datasets;
 pub mod error;
 pub mod openapi;
+pub mod security_headers;
 pub mod sessions;
 pub mod tasks;
 pub mod trainer_views;
@@ -124,7 +126,8 @@ pub fn app(state: AppState) -> Router {
                 .allow_headers([header::AUTHORIZATION, header::CONTENT_TYPE]),
         );
     }
-    router.with_state(state)
+    // Outermost, so that CORS preflights and body-limit refusals carry them too.
+    security_headers::add(router).with_state(state)
 }
 
 /// A page of the web UI inside the binary.
