@@ -72,6 +72,9 @@ pub enum ServerMessage {
         message: String,
         #[serde(skip_serializing_if = "Option::is_none")]
         id: Option<QueryId>,
+        /// `rate_limited`: send the refused message again after this many milliseconds.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        retry_after_ms: Option<u64>,
     },
     /// The session is over (or the server is shutting down); no more messages follow.
     Ended {
@@ -226,6 +229,8 @@ pub enum ErrorCode {
 pub struct ProtocolError {
     pub code: ErrorCode,
     pub message: String,
+    /// When the client may send the refused message again (`rate_limited` only).
+    pub retry_after_ms: Option<u64>,
 }
 
 impl ProtocolError {
@@ -233,6 +238,15 @@ impl ProtocolError {
         Self {
             code,
             message: message.into(),
+            retry_after_ms: None,
+        }
+    }
+
+    /// Too many messages: this one was not taken; send it again in `retry_after_ms`.
+    pub fn rate_limited(message: impl Into<String>, retry_after_ms: u64) -> Self {
+        Self {
+            retry_after_ms: Some(retry_after_ms),
+            ..Self::new(ErrorCode::RateLimited, message)
         }
     }
 
@@ -249,6 +263,7 @@ impl ProtocolError {
             code: self.code,
             message: self.message.clone(),
             id,
+            retry_after_ms: self.retry_after_ms,
         }
     }
 }
