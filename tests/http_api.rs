@@ -177,6 +177,18 @@ async fn bad_launch_requests_get_clear_errors_and_nothing_is_stored() {
     post(r#"{"task":"reaching","method":"dref","trainer":"human","params":{"pace_hz":0}}"#)
         .await
         .assert_error(StatusCode::UNPROCESSABLE_ENTITY, "invalid_session");
+    // A NaN is not JSON: the error names the field it is in, not only a column.
+    let r = post(
+        r#"{"task":"reaching","method":"dref","trainer":"human","params":{"pace_hz":20,"c":NaN}}"#,
+    )
+    .await;
+    r.assert_error(StatusCode::BAD_REQUEST, "bad_request");
+    let message = r.json()["error"]["message"].as_str().unwrap().to_string();
+    assert!(message.starts_with("field \"params.c\""), "{message}");
+    assert!(message.contains("NaN"), "{message}");
+    let r = post(r#"{"task":"reaching","method":"dref","trainer":"human","seed":"one"}"#).await;
+    let message = r.json()["error"]["message"].as_str().unwrap().to_string();
+    assert!(message.contains("\"seed\""), "{message}");
     // Oversized bodies are refused before parsing.
     let big = format!(
         r#"{{"task":"reaching","method":"dref","trainer":"human","params":{{"x":"{}"}}}}"#,

@@ -549,3 +549,44 @@ async fn a_rate_limited_message_says_when_to_send_it_again_and_is_taken_then() {
     let e = t.next_of(&["error"], WAIT).await;
     assert_eq!(e["code"], "unknown_query", "taken after the wait: {e}");
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_malformed_value_is_refused_naming_its_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = serve(dir.path()).await;
+    let api = Api::new(server.addr);
+    let (id, token) = launch(
+        &api,
+        json!({"task": "reaching", "method": "ef-100", "trainer": "human", "seed": 0, "steps": 50,
+               "params": {"pace_hz": 100, "hidden": [32, 32], "batch_size": 32}}),
+    )
+    .await;
+    let mut t = Trainer::connect(server.addr, &id, &token).await;
+    for (text, code, names) in [
+        (
+            r#"{"type":"answer","id":0,"value":NaN}"#,
+            "malformed_json",
+            "\"value\"",
+        ),
+        (
+            r#"{"type":"answer","id":0,"value":1e999}"#,
+            "malformed_json",
+            "\"value\"",
+        ),
+        (
+            r#"{"type":"answer","id":0.5,"value":1}"#,
+            "bad_message",
+            "\"id\"",
+        ),
+        (r#"{"type":"undo","id":[1]}"#, "bad_message", "\"id\""),
+    ] {
+        t.send_text(text).await;
+        let e = t.next_of(&["error"], WAIT).await;
+        assert_eq!(e["code"], code, "{text} -> {e}");
+        let message = e["message"].as_str().unwrap();
+        assert!(
+            message.contains(names),
+            "{text}: the error names the field: {message}"
+        );
+    }
+}

@@ -7,12 +7,14 @@
 //!   `trainer_views` builds those views.
 //! - `datasets`: a session's Parquet table, posterior and policy files.
 //! - `tasks`, `openapi`: self-description.
-//! - `auth`, `error`: the bearer check and the JSON error shape.
+//! - `auth`, `error`, `json_body`: the bearer check, the JSON error shape, and request bodies
+//!   whose errors name the field that was wrong.
 //! - `security_headers`: the CSP, referrer and MIME-sniffing headers on every response.
 
 pub mod auth;
 pub mod datasets;
 pub mod error;
+pub mod json_body;
 pub mod openapi;
 pub mod security_headers;
 pub mod sessions;
