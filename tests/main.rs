@@ -22,6 +22,7 @@ mod http_api;
 mod lunar_lander;
 mod prefs_e2e;
 mod recording;
+mod remote_env_failures;
 mod remote_envs;
 mod report;
 mod reproduce;
