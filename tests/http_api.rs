@@ -228,6 +228,18 @@ const OPERATIONS: [(&str, &str); 23] = [
     ("get", "/ws/sessions/{id}"),
 ];
 
+/// The README's list of the API names every operation, so that a route cannot go undocumented.
+#[test]
+fn the_readme_lists_every_operation() {
+    let readme = std::fs::read_to_string(crate::support::server::root().join("README.md")).unwrap();
+    let missing: Vec<String> = OPERATIONS
+        .iter()
+        .map(|(method, path)| format!("`{} {path}`", method.to_uppercase()))
+        .filter(|op| !readme.contains(op.as_str()))
+        .collect();
+    assert!(missing.is_empty(), "README.md does not list {missing:?}");
+}
+
 /// Every `$ref` in `v`.
 fn refs(v: &Value, out: &mut Vec<String>) {
     match v {
@@ -284,6 +296,13 @@ async fn the_openapi_document_lists_exactly_the_routes() {
     let schemas = &doc["components"]["schemas"];
     assert!(schemas["Settings"]["properties"]["pace_hz"].is_object());
     assert!(schemas["LaunchRequest"].to_string().contains("Settings"));
+    // An episode row's feedback and cumulative return are totals over the session so far.
+    for field in ["cumulative_return", "feedback_count", "feedback_fraction"] {
+        let about = schemas["EpisodeRow"]["properties"][field]["description"]
+            .as_str()
+            .unwrap_or_default();
+        assert!(about.starts_with("A running total"), "{field}: {about:?}");
+    }
     // Public routes need no token; the others take the researcher's bearer token.
     for (method, path) in OPERATIONS {
         let public = paths[path][method]["security"] == json!([{}]);
