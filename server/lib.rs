@@ -37,8 +37,9 @@
 //!   owner task each that alone holds the session's live state (events, answers, undo,
 //!   deadlines and status in one `select!`; commit, then acknowledge); stop, resume and
 //!   graceful shutdown.
-//! - [`http`]: REST routes, auth, errors, the web UI's files; [`ws`]: the trainer websocket and
-//!   its typed protocol.
+//! - [`http`]: REST routes, auth, errors, security headers, the web UI's files; [`ws`]: the
+//!   trainer websocket and its typed protocol; [`json_input`]: clients' JSON read with errors
+//!   that name the field that was wrong.
 //! - [`shipped`]: the web UI and the shipped experts, carried inside the binary.
 //! - [`remote_env`]: environments in another process or on another machine
 //!   (`docs/env-protocol.md`): a blocking TCP client that is an `Env` like the built-in tasks,
@@ -59,6 +60,7 @@ pub mod export;
 pub mod guidance;
 pub mod http;
 pub mod hub;
+pub mod json_input;
 pub mod protocol;
 pub mod record;
 pub mod remote_env;

@@ -6,6 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::json_input;
 use crate::scene_graph::Predicate;
 pub use crate::session::combine::Combine;
 pub use crate::session::{AnswerValue, Answerer, QueryKind};
@@ -72,6 +73,9 @@ pub enum ServerMessage {
         message: String,
         #[serde(skip_serializing_if = "Option::is_none")]
         id: Option<QueryId>,
+        /// `rate_limited`: send the refused message again after this many milliseconds.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        retry_after_ms: Option<u64>,
     },
     /// The session is over (or the server is shutting down); no more messages follow.
     Ended {
@@ -159,13 +163,21 @@ pub enum ClientMessage {
     Undo { id: QueryId },
 }
 
-/// [`ClientMessage`] as JSON: ids are read as any integer, so that a negative one is refused
-/// as an unknown query (no session has one) rather than as a malformed message.
+/// The fields of an `answer` ([`ClientMessage::Answer`]) as JSON: ids are read as any integer,
+/// so that a negative one is refused as an unknown query (no session has one) rather than as a
+/// malformed message.
 #[derive(Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-enum WireClientMessage {
-    Answer { id: i64, value: AnswerValue },
-    Undo { id: i64 },
+#[serde(deny_unknown_fields)]
+struct AnswerFields {
+    id: i64,
+    value: AnswerValue,
+}
+
+/// The fields of an `undo`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct UndoFields {
+    id: i64,
 }
 
 /// Why a query needs no answer any more.
@@ -226,6 +238,8 @@ pub enum ErrorCode {
 pub struct ProtocolError {
     pub code: ErrorCode,
     pub message: String,
+    /// When the client may send the refused message again (`rate_limited` only).
+    pub retry_after_ms: Option<u64>,
 }
 
 impl ProtocolError {
@@ -233,6 +247,15 @@ impl ProtocolError {
         Self {
             code,
             message: message.into(),
+            retry_after_ms: None,
+        }
+    }
+
+    /// Too many messages: this one was not taken; send it again in `retry_after_ms`.
+    pub fn rate_limited(message: impl Into<String>, retry_after_ms: u64) -> Self {
+        Self {
+            retry_after_ms: Some(retry_after_ms),
+            ..Self::new(ErrorCode::RateLimited, message)
         }
     }
 
@@ -249,28 +272,46 @@ impl ProtocolError {
             code: self.code,
             message: self.message.clone(),
             id,
+            retry_after_ms: self.retry_after_ms,
         }
     }
 }
 
-/// Parse one text message from a trainer.
+/// Parse one text message from a trainer. Errors name the message type and the field that
+/// was wrong.
 pub fn parse_client(text: &str) -> Result<ClientMessage, ProtocolError> {
-    let value: serde_json::Value = serde_json::from_str(text)
-        .map_err(|e| ProtocolError::new(ErrorCode::MalformedJson, format!("not JSON: {e}")))?;
-    if !value.is_object() {
+    const EXPECTED: &str = "expected {\"type\": \"answer\", \"id\": <query id>, \"value\": 1 | 0 | -1 | \"left\" | \"right\" | \"equal\" | \"skip\"} or {\"type\": \"undo\", \"id\": <query id>}";
+    let value: serde_json::Value = json_input::from_str(text)
+        .map_err(|e| ProtocolError::new(ErrorCode::MalformedJson, e.to_string()))?;
+    let serde_json::Value::Object(mut fields) = value else {
         return Err(ProtocolError::new(
             ErrorCode::BadMessage,
-            "a message is a JSON object with a \"type\"",
+            format!("a message is a JSON object with a \"type\"; {EXPECTED}"),
         ));
-    }
-    let wire: WireClientMessage = serde_json::from_value(value).map_err(|e| {
-        ProtocolError::new(
-            ErrorCode::BadMessage,
-            format!(
-                "{e}; expected {{\"type\": \"answer\", \"id\": <query id>, \"value\": 1 | 0 | -1 | \"left\" | \"right\" | \"equal\" | \"skip\"}} or {{\"type\": \"undo\", \"id\": <query id>}}"
-            ),
-        )
-    })?;
+    };
+    let kind = fields.remove("type");
+    let bad =
+        |what: String| ProtocolError::new(ErrorCode::BadMessage, format!("{what}; {EXPECTED}"));
+    let fields = serde_json::Value::Object(fields);
+    let wire = match kind.as_ref().and_then(serde_json::Value::as_str) {
+        Some("answer") => {
+            let a: AnswerFields = json_input::from_value(fields)
+                .map_err(|e| bad(format!("an answer message: {e}")))?;
+            (a.id, Some(a.value))
+        }
+        Some("undo") => {
+            let u: UndoFields =
+                json_input::from_value(fields).map_err(|e| bad(format!("an undo message: {e}")))?;
+            (u.id, None)
+        }
+        Some(other) => return Err(bad(format!("unknown message type {other:?}"))),
+        None => {
+            return Err(bad(match kind {
+                None => "a message without a \"type\"".to_string(),
+                Some(k) => format!("field \"type\": {k} is not a message type"),
+            }));
+        }
+    };
     let query = |id: i64| {
         QueryId::try_from(id).map_err(|_| {
             ProtocolError::new(
@@ -280,17 +321,17 @@ pub fn parse_client(text: &str) -> Result<ClientMessage, ProtocolError> {
         })
     };
     Ok(match wire {
-        WireClientMessage::Answer { value, .. } if !value.is_single() => {
+        (_, Some(value)) if !value.is_single() => {
             return Err(ProtocolError::new(
                 ErrorCode::BadMessage,
-                "a trainer answers 1, 0, -1, \"left\", \"right\", \"equal\" or \"skip\"; means and tallies are what the server combines",
+                "an answer message: field \"value\": a trainer answers 1, 0, -1, \"left\", \"right\", \"equal\" or \"skip\"; means and tallies are what the server combines",
             ));
         }
-        WireClientMessage::Answer { id, value } => ClientMessage::Answer {
+        (id, Some(value)) => ClientMessage::Answer {
             id: query(id)?,
             value,
         },
-        WireClientMessage::Undo { id } => ClientMessage::Undo { id: query(id)? },
+        (id, None) => ClientMessage::Undo { id: query(id)? },
     })
 }
 

@@ -177,6 +177,18 @@ async fn bad_launch_requests_get_clear_errors_and_nothing_is_stored() {
     post(r#"{"task":"reaching","method":"dref","trainer":"human","params":{"pace_hz":0}}"#)
         .await
         .assert_error(StatusCode::UNPROCESSABLE_ENTITY, "invalid_session");
+    // A NaN is not JSON: the error names the field it is in, not only a column.
+    let r = post(
+        r#"{"task":"reaching","method":"dref","trainer":"human","params":{"pace_hz":20,"c":NaN}}"#,
+    )
+    .await;
+    r.assert_error(StatusCode::BAD_REQUEST, "bad_request");
+    let message = r.json()["error"]["message"].as_str().unwrap().to_string();
+    assert!(message.starts_with("field \"params.c\""), "{message}");
+    assert!(message.contains("NaN"), "{message}");
+    let r = post(r#"{"task":"reaching","method":"dref","trainer":"human","seed":"one"}"#).await;
+    let message = r.json()["error"]["message"].as_str().unwrap().to_string();
+    assert!(message.contains("\"seed\""), "{message}");
     // Oversized bodies are refused before parsing.
     let big = format!(
         r#"{{"task":"reaching","method":"dref","trainer":"human","params":{{"x":"{}"}}}}"#,
@@ -215,6 +227,18 @@ const OPERATIONS: [(&str, &str); 23] = [
     ("get", "/healthz"),
     ("get", "/ws/sessions/{id}"),
 ];
+
+/// The README's list of the API names every operation, so that a route cannot go undocumented.
+#[test]
+fn the_readme_lists_every_operation() {
+    let readme = std::fs::read_to_string(crate::support::server::root().join("README.md")).unwrap();
+    let missing: Vec<String> = OPERATIONS
+        .iter()
+        .map(|(method, path)| format!("`{} {path}`", method.to_uppercase()))
+        .filter(|op| !readme.contains(op.as_str()))
+        .collect();
+    assert!(missing.is_empty(), "README.md does not list {missing:?}");
+}
 
 /// Every `$ref` in `v`.
 fn refs(v: &Value, out: &mut Vec<String>) {
@@ -272,6 +296,13 @@ async fn the_openapi_document_lists_exactly_the_routes() {
     let schemas = &doc["components"]["schemas"];
     assert!(schemas["Settings"]["properties"]["pace_hz"].is_object());
     assert!(schemas["LaunchRequest"].to_string().contains("Settings"));
+    // An episode row's feedback and cumulative return are totals over the session so far.
+    for field in ["cumulative_return", "feedback_count", "feedback_fraction"] {
+        let about = schemas["EpisodeRow"]["properties"][field]["description"]
+            .as_str()
+            .unwrap_or_default();
+        assert!(about.starts_with("A running total"), "{field}: {about:?}");
+    }
     // Public routes need no token; the others take the researcher's bearer token.
     for (method, path) in OPERATIONS {
         let public = paths[path][method]["security"] == json!([{}]);

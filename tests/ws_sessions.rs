@@ -495,3 +495,98 @@ async fn an_undone_preference_leaves_the_next_pair_waiting_and_is_answered_again
     t.close().await;
     server.shutdown().await.unwrap();
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_rate_limited_message_says_when_to_send_it_again_and_is_taken_then() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = serve(dir.path()).await;
+    let api = Api::new(server.addr);
+    let (id, token) = launch(
+        &api,
+        json!({"task": "reaching", "method": "ef-100", "trainer": "human", "seed": 0, "steps": 50,
+               "params": {"pace_hz": 100, "hidden": [32, 32], "batch_size": 32}}),
+    )
+    .await;
+    let mut t = Trainer::connect(server.addr, &id, &token).await;
+    // More than the burst at once (answers to no query: each is refused, one way or the other).
+    let unknown = r#"{"type":"answer","id":999999,"value":1}"#;
+    for _ in 0..60 {
+        t.send_text(unknown).await;
+    }
+    let mut replies = 0;
+    let limited = loop {
+        let e = t.next_of(&["error"], WAIT).await;
+        replies += 1;
+        if e["code"] == "rate_limited" {
+            break e;
+        }
+        assert_eq!(e["code"], "unknown_query", "{e}");
+    };
+    let retry_after_ms = limited["retry_after_ms"]
+        .as_u64()
+        .unwrap_or_else(|| panic!("a rate_limited error says when to retry: {limited}"));
+    assert!((1..=1000).contains(&retry_after_ms), "{limited}");
+    assert_eq!(limited["id"], 999999, "{limited}");
+    assert!(
+        limited["message"]
+            .as_str()
+            .unwrap()
+            .contains(&format!("send it again in {retry_after_ms} ms")),
+        "the text says it too: {limited}"
+    );
+    // Drain the rest of the burst's replies; then, after waiting what the last refusal said,
+    // the same message is taken (it reaches the session, which does not know the query).
+    let mut wait_ms = retry_after_ms;
+    while replies < 60 {
+        let e = t.next_of(&["error"], WAIT).await;
+        if let Some(ms) = e["retry_after_ms"].as_u64() {
+            wait_ms = ms;
+        }
+        replies += 1;
+    }
+    tokio::time::sleep(Duration::from_millis(wait_ms)).await;
+    t.send_text(unknown).await;
+    let e = t.next_of(&["error"], WAIT).await;
+    assert_eq!(e["code"], "unknown_query", "taken after the wait: {e}");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_malformed_value_is_refused_naming_its_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = serve(dir.path()).await;
+    let api = Api::new(server.addr);
+    let (id, token) = launch(
+        &api,
+        json!({"task": "reaching", "method": "ef-100", "trainer": "human", "seed": 0, "steps": 50,
+               "params": {"pace_hz": 100, "hidden": [32, 32], "batch_size": 32}}),
+    )
+    .await;
+    let mut t = Trainer::connect(server.addr, &id, &token).await;
+    for (text, code, names) in [
+        (
+            r#"{"type":"answer","id":0,"value":NaN}"#,
+            "malformed_json",
+            "\"value\"",
+        ),
+        (
+            r#"{"type":"answer","id":0,"value":1e999}"#,
+            "malformed_json",
+            "\"value\"",
+        ),
+        (
+            r#"{"type":"answer","id":0.5,"value":1}"#,
+            "bad_message",
+            "\"id\"",
+        ),
+        (r#"{"type":"undo","id":[1]}"#, "bad_message", "\"id\""),
+    ] {
+        t.send_text(text).await;
+        let e = t.next_of(&["error"], WAIT).await;
+        assert_eq!(e["code"], code, "{text} -> {e}");
+        let message = e["message"].as_str().unwrap();
+        assert!(
+            message.contains(names),
+            "{text}: the error names the field: {message}"
+        );
+    }
+}

@@ -7,12 +7,16 @@
 //!   `trainer_views` builds those views.
 //! - `datasets`: a session's Parquet table, posterior and policy files.
 //! - `tasks`, `openapi`: self-description.
-//! - `auth`, `error`: the bearer check and the JSON error shape.
+//! - `auth`, `error`, `json_body`: the bearer check, the JSON error shape, and request bodies
+//!   whose errors name the field that was wrong.
+//! - `security_headers`: the CSP, referrer and MIME-sniffing headers on every response.
 
 pub mod auth;
 pub mod datasets;
 pub mod error;
+pub mod json_body;
 pub mod openapi;
+pub mod security_headers;
 pub mod sessions;
 pub mod tasks;
 pub mod trainer_views;
@@ -124,7 +128,8 @@ pub fn app(state: AppState) -> Router {
                 .allow_headers([header::AUTHORIZATION, header::CONTENT_TYPE]),
         );
     }
-    router.with_state(state)
+    // Outermost, so that CORS preflights and body-limit refusals carry them too.
+    security_headers::add(router).with_state(state)
 }
 
 /// A page of the web UI inside the binary.

@@ -1,7 +1,6 @@
 //! `/api/sessions`: launch, list, inspect, stop, resume; episodes, answers, export.
 
 use axum::Json;
-use axum::extract::rejection::JsonRejection;
 use axum::extract::{Path, Query, State};
 use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Response};
@@ -10,6 +9,7 @@ use serde::{Deserialize, Serialize};
 use super::AppState;
 use super::auth::SessionAccess;
 use super::error::{ApiError, ApiResult};
+use super::json_body::JsonBody;
 use super::openapi::ErrorBody;
 use crate::remote_env::RemoteTarget;
 use crate::session::spec::DEFAULT_QUERIES;
@@ -198,12 +198,8 @@ async fn row(state: &AppState, id: &str) -> ApiResult<SessionRow> {
 )]
 pub async fn create(
     State(state): State<AppState>,
-    body: Result<Json<LaunchRequest>, JsonRejection>,
+    JsonBody(request): JsonBody<LaunchRequest>,
 ) -> ApiResult<(StatusCode, Json<Launched>)> {
-    let Json(request) = body.map_err(|e| match e.status() {
-        StatusCode::PAYLOAD_TOO_LARGE => ApiError::PayloadTooLarge(super::MAX_BODY_BYTES),
-        _ => ApiError::BadRequest(e.body_text()),
-    })?;
     let spec = request.into_spec()?;
     let row = state.hub.launch(spec).await?;
     let status = state.hub.status_of(&row);
@@ -473,10 +469,9 @@ pub async fn export(
 pub async fn survey(
     State(state): State<AppState>,
     SessionAccess(r, who): SessionAccess,
-    body: Result<Json<Survey>, JsonRejection>,
+    JsonBody(survey): JsonBody<Survey>,
 ) -> ApiResult<Json<SessionView>> {
     let id = r.id.clone();
-    let Json(survey) = body.map_err(|e| ApiError::BadRequest(e.body_text()))?;
     survey.validate().map_err(ApiError::BadRequest)?;
     if state.hub.status_of(&r).is_active() {
         return Err(ApiError::Conflict(

@@ -4,7 +4,6 @@
 //! `.../agreement` (how much the trainers agree).
 
 use axum::Json;
-use axum::extract::rejection::JsonRejection;
 use axum::extract::{Path, State};
 use axum::http::StatusCode;
 use serde::{Deserialize, Serialize};
@@ -12,6 +11,7 @@ use serde::{Deserialize, Serialize};
 use super::AppState;
 use super::auth::SessionAccess;
 use super::error::{ApiError, ApiResult};
+use super::json_body::JsonBody;
 use super::openapi::ErrorBody;
 use super::trainer_views::{AgreementView, TrainerStats, agreement, personal_url, trainer_stats};
 use crate::hub::{Identity, random_hex};
@@ -56,8 +56,7 @@ pub async fn session_row(state: &AppState, id: &str) -> ApiResult<SessionRow> {
         .ok_or_else(|| ApiError::NotFound(format!("no session {id}")))
 }
 
-fn name_of(body: Result<Json<NameRequest>, JsonRejection>) -> ApiResult<String> {
-    let Json(request) = body.map_err(|e| ApiError::BadRequest(e.body_text()))?;
+fn name_of(JsonBody(request): JsonBody<NameRequest>) -> ApiResult<String> {
     check_name(&request.name).map_err(ApiError::BadRequest)
 }
 
@@ -95,7 +94,7 @@ async fn add(
 pub async fn invite(
     State(state): State<AppState>,
     Path(id): Path<String>,
-    body: Result<Json<NameRequest>, JsonRejection>,
+    body: JsonBody<NameRequest>,
 ) -> ApiResult<(StatusCode, Json<TrainerLink>)> {
     let name = name_of(body)?;
     session_row(&state, &id).await?;
@@ -120,7 +119,7 @@ pub async fn invite(
 pub async fn join(
     State(state): State<AppState>,
     SessionAccess(row, who): SessionAccess,
-    body: Result<Json<NameRequest>, JsonRejection>,
+    body: JsonBody<NameRequest>,
 ) -> ApiResult<(StatusCode, Json<TrainerLink>)> {
     let name = name_of(body)?;
     if let Identity::Trainer(t) = who {

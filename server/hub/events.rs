@@ -132,6 +132,7 @@ impl Owner {
                 }
             }
             SessionEvent::Progress { progress } => {
+                let progress = progress.max(self.resumed_at);
                 self.progress.progress = progress;
                 // Between episode ends too: the share of steps asked so far (every asked query
                 // is answered, by a person or by its timeout).

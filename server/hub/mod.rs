@@ -162,6 +162,7 @@ impl Hub {
             row.id.clone(),
             spec,
             Duration::from_secs_f64(timeout),
+            u64::try_from(row.progress).unwrap_or(0),
         );
         {
             let mut map = self.sessions.lock().unwrap_or_else(|e| e.into_inner());

@@ -99,24 +99,31 @@ pub(super) struct Owner {
     /// Synthetic answers waiting to be stored in one transaction.
     pub batch: Vec<SyntheticAnswer>,
     pub stored_progress_at: std::time::Instant,
+    /// Steps or queries the session had done before this start (a resume): what it reports
+    /// until its run is past them again (a replay of stored answers, or a remote session's run
+    /// resumed from an earlier checkpoint, counts up from below).
+    pub resumed_at: u64,
     /// The running episode's frames, written to the data dir when it ends (for replay).
     pub episode_frames: EpisodeFrames,
     pub ending: Ending,
 }
 
 impl Owner {
-    /// A queued session's owner and the handle to reach it.
+    /// A queued session's owner and the handle to reach it; `resumed_at`: the progress the
+    /// session had stored (0 for a new one).
     pub fn new(
         hub: Arc<Hub>,
         id: String,
         spec: SessionSpec,
         answer_timeout: Duration,
+        resumed_at: u64,
     ) -> (Self, SessionHandle, UnboundedReceiver<Command>) {
         // Validated at launch: a stored session's settings read back.
         let (answers_per_query, combine) = spec
             .settings()
             .map_or((1, Combine::First), |s| (s.answers_per_query, s.combine));
         let progress = ProgressMessage {
+            progress: resumed_at,
             budget: spec.budget,
             unit: spec.method.budget_unit(),
             ..Default::default()
@@ -160,6 +167,7 @@ impl Owner {
             snapshot,
             batch: Vec::new(),
             stored_progress_at: std::time::Instant::now(),
+            resumed_at,
             episode_frames: EpisodeFrames::default(),
             ending: Ending::Failed("the session thread ended without a word".into()),
         };

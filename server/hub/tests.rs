@@ -86,7 +86,7 @@ async fn harness_with(params: serde_json::Value) -> Harness {
         })
         .await
         .unwrap();
-    let (mut owner, handle, commands) = Owner::new(hub, "s1".into(), spec, TIMEOUT);
+    let (mut owner, handle, commands) = Owner::new(hub, "s1".into(), spec, TIMEOUT, 0);
     let (control_tx, controls) = std::sync::mpsc::channel();
     owner.control = Some(control_tx);
     let (events, events_rx) = unbounded_channel();

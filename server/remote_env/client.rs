@@ -145,13 +145,6 @@ impl RemoteEnv {
         &self.description
     }
 
-    /// Say goodbye (best effort) and close.
-    pub fn close(mut self) {
-        if self.broken.is_none() {
-            let _ = self.call(&Request::Close);
-        }
-    }
-
     /// Break the connection with `reason` (every later call returns it).
     fn fault(&mut self, reason: String) -> EnvFault {
         let fault = EnvFault(format!("the env at {}: {reason}", self.url));
@@ -351,6 +344,27 @@ impl RemoteEnv {
             truncated: truncated && !r.terminated,
             outcome,
         })
+    }
+}
+
+/// The longest a goodbye waits for the env's `close` reply.
+const CLOSE_WAIT: Duration = Duration::from_secs(2);
+
+impl Drop for RemoteEnv {
+    /// Say goodbye however the connection's user ends (a session that finished, stopped, was
+    /// interrupted or failed elsewhere; a CLI run): `close`, and the env's `close` back, so that
+    /// the env can let go of what the connection held (a robot can park, a factory's env can be
+    /// closed) instead of guessing from a dropped socket. Best effort and brief: a broken
+    /// connection gets none, and a slow env is not waited on for long.
+    fn drop(&mut self) {
+        if self.broken.is_some() {
+            return;
+        }
+        let deadline = Instant::now() + self.timeouts.request.min(CLOSE_WAIT);
+        if wire::send(&mut self.stream, &Request::Close).is_ok() {
+            let _ = wire::receive(&mut self.stream, deadline);
+        }
+        let _ = self.stream.shutdown(std::net::Shutdown::Both);
     }
 }
 

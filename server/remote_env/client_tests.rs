@@ -284,3 +284,45 @@ fn an_unreachable_env_or_a_bad_hello_fails_the_connection() {
     let fault = RemoteEnv::connect(&url, fast()).err().unwrap().0;
     assert!(fault.contains("protocol 2"), "{fault}");
 }
+
+#[test]
+fn a_connection_says_close_when_it_is_let_go_and_a_broken_one_does_not() {
+    let (seen_tx, seen) = std::sync::mpsc::channel::<String>();
+    let url = env(move |s, r| {
+        let kind = r["type"].as_str().unwrap().to_string();
+        let _ = seen_tx.send(kind.clone());
+        match kind.as_str() {
+            "reset" => reset_ok(s),
+            "close" => {
+                write(s, &json!({"type": "close"}));
+                return false;
+            }
+            _ => return false,
+        }
+        true
+    });
+    let mut e = RemoteEnv::connect(&url, fast()).unwrap();
+    e.try_reset(1).unwrap();
+    drop(e);
+    let wait = Duration::from_secs(5);
+    assert_eq!(seen.recv_timeout(wait).unwrap(), "reset");
+    assert_eq!(
+        seen.recv_timeout(wait).unwrap(),
+        "close",
+        "dropping the env says goodbye"
+    );
+
+    // After a fault the connection is gone: no goodbye, and no wait for one.
+    let (seen_tx, seen) = std::sync::mpsc::channel::<String>();
+    let url = env(move |_, r| {
+        let _ = seen_tx.send(r["type"].as_str().unwrap().to_string());
+        false // closes on the first request
+    });
+    let mut e = RemoteEnv::connect(&url, fast()).unwrap();
+    assert!(e.try_reset(1).is_err());
+    let start = Instant::now();
+    drop(e);
+    assert!(start.elapsed() < Duration::from_millis(400));
+    assert_eq!(seen.recv_timeout(wait).unwrap(), "reset");
+    assert!(seen.recv_timeout(Duration::from_millis(200)).is_err());
+}

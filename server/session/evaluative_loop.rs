@@ -182,9 +182,14 @@ fn drive(
             }
             sink.send(revised(r, run.steps()));
         }
-        let report = run
-            .try_step(&mut trainer)
-            .map_err(|fault| format!("at step {}: {fault}", run.steps()))?;
+        let report = run.try_step(&mut trainer).map_err(|fault| {
+            // The progress the session ends with is the step its reason names, not the last
+            // one reported on the timer.
+            sink.send(SessionEvent::Progress {
+                progress: run.steps(),
+            });
+            format!("at step {}: {fault}", run.steps())
+        })?;
         if trainer.asker.aborted {
             let h = trainer.asker.controls.halted().unwrap_or(Halt::Shutdown);
             return Ok(end_evaluative(h, &run, sink.as_ref(), true));

@@ -9,13 +9,20 @@ use crate::guidance::evaluative_run::EpisodeRecord;
 /// One finished episode, as `GET /api/sessions/{id}/episodes` lists it.
 #[derive(Clone, Debug, Serialize, utoipa::ToSchema)]
 pub struct EpisodeRow {
+    /// 0-based episode index.
     pub episode: i64,
+    /// The run's environment steps when the episode ended.
     pub step: i64,
+    /// This episode's return.
     #[serde(rename = "return")]
     pub episode_return: f64,
+    /// This episode's steps.
     pub length: i64,
+    /// A running total: the returns of every episode so far, this one included.
     pub cumulative_return: f64,
+    /// A running total: queries asked since the session started (not in this episode alone).
     pub feedback_count: i64,
+    /// A running total: `feedback_count / step`, the share of all steps so far that were asked.
     pub feedback_fraction: f64,
     pub outcome: String,
 }

@@ -21,11 +21,10 @@ use crate::protocol::{
 use crate::scene_graph::SceneGraph;
 use crate::store::SessionRow;
 
+use super::rate_limit::{MESSAGES_PER_SECOND, RateLimit, whole_ms};
+
 /// Largest message a trainer may send: answers are a few dozen bytes.
 pub const MAX_MESSAGE_BYTES: usize = 4 * 1024;
-/// Answers per second a socket may send on average, and the burst it may save up.
-const ANSWER_RATE: f64 = 20.0;
-const ANSWER_BURST: f64 = 40.0;
 
 /// The trainer's websocket: JSON messages, one typed enum each way (`docs/protocol.md`).
 #[utoipa::path(
@@ -99,34 +98,6 @@ fn hello(
     }
 }
 
-/// A token bucket: `ANSWER_RATE` per second, bursts of `ANSWER_BURST`.
-struct RateLimit {
-    tokens: f64,
-    at: Instant,
-}
-
-impl RateLimit {
-    fn new() -> Self {
-        Self {
-            tokens: ANSWER_BURST,
-            at: Instant::now(),
-        }
-    }
-
-    fn allow(&mut self) -> bool {
-        let now = Instant::now();
-        self.tokens = (self.tokens + now.duration_since(self.at).as_secs_f64() * ANSWER_RATE)
-            .min(ANSWER_BURST);
-        self.at = now;
-        if self.tokens >= 1.0 {
-            self.tokens -= 1.0;
-            true
-        } else {
-            false
-        }
-    }
-}
-
 async fn serve(state: AppState, row: SessionRow, who: Identity, mut socket: WebSocket) {
     let session = state.hub.session(&row.id);
     let snapshot = session.as_ref().map(SessionHandle::snapshot);
@@ -170,7 +141,7 @@ async fn serve(state: AppState, row: SessionRow, who: Identity, mut socket: WebS
             return;
         }
     }
-    let mut limit = RateLimit::new();
+    let mut limit = RateLimit::new(Instant::now());
     loop {
         tokio::select! {
             broadcast = rx.recv() => match broadcast {
@@ -242,14 +213,18 @@ async fn handle(
         Ok(m) => m,
         Err(e) => return Some(e.to_message(id_of(t))),
     };
-    if !limit.allow() {
+    if let Err(wait) = limit.take(Instant::now()) {
         let id = match &message {
             ClientMessage::Answer { id, .. } | ClientMessage::Undo { id } => *id,
         };
+        // Nothing of the message was kept: the client sends it again after the wait.
+        let retry_after_ms = whole_ms(wait);
         return Some(
-            ProtocolError::new(
-                ErrorCode::RateLimited,
-                format!("more than {ANSWER_RATE} messages a second; slow down"),
+            ProtocolError::rate_limited(
+                format!(
+                    "more than {MESSAGES_PER_SECOND} messages a second; this one was not taken: send it again in {retry_after_ms} ms"
+                ),
+                retry_after_ms,
             )
             .to_message(Some(id)),
         );

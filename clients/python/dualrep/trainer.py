@@ -71,13 +71,34 @@ class Trainer:
 
     def run(self, answer: AnswerFn, timeout: float = 600.0) -> Result:
         """Answer every query with ``answer`` until the session ends (or ``timeout`` seconds
-        pass with nothing from the server); what was acknowledged, and how it ended."""
+        pass with nothing from the server); what was acknowledged, and how it ended.
+
+        An answer refused as ``rate_limited`` is sent again after the ``retry_after_ms`` the
+        refusal names (the server kept nothing of it), unless the query closed meanwhile; such
+        refusals are not counted in ``Result.errors``."""
         result = Result(status="running", reason=None)
         asked: Set[int] = set()
+        # Answers given but not acknowledged yet, to send again when one is refused for rate.
+        given: Dict[int, Answer] = {}
+        # query id -> when (time.monotonic()) to send its answer again.
+        retry_at: Dict[int, float] = {}
+        last_heard = time.monotonic()
         while True:
-            message = self._receive(timeout)
+            now = time.monotonic()
+            for query_id in [q for q, at in retry_at.items() if at <= now]:
+                del retry_at[query_id]
+                if query_id in given:
+                    self.answer(query_id, given[query_id])
+            silent_for = now - last_heard
+            wait = timeout - silent_for
+            if retry_at:
+                wait = min(wait, max(0.0, min(retry_at.values()) - now))
+            message = self._receive(max(0.0, wait))
             if message is None:
-                raise TimeoutError(f"nothing from the session for {timeout} s")
+                if time.monotonic() - last_heard >= timeout:
+                    raise TimeoutError(f"nothing from the session for {timeout} s")
+                continue  # a retry is due
+            last_heard = time.monotonic()
             kind = message.get("type")
             if kind == "query":
                 query_id = int(message["id"])
@@ -86,13 +107,22 @@ class Trainer:
                 asked.add(query_id)
                 value = answer(message)
                 if value is not None:
+                    given[query_id] = value
                     self.answer(query_id, value)
             elif kind == "undone":
                 asked.discard(int(message["id"]))
             elif kind == "ack":
-                result.answered[int(message["id"])] = message["value"]
+                query_id = int(message["id"])
+                given.pop(query_id, None)
+                result.answered[query_id] = message["value"]
+            elif kind == "withdrawn":
+                query_id = int(message["id"])
+                given.pop(query_id, None)
+                retry_at.pop(query_id, None)
             elif kind == "frame":
                 result.frames += 1
+            elif kind == "error" and message.get("code") == "rate_limited" and message.get("id") in given:
+                retry_at[int(message["id"])] = time.monotonic() + float(message.get("retry_after_ms", 1000)) / 1000.0
             elif kind == "error":
                 result.errors.append(message)
             elif kind == "ended":
