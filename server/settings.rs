@@ -184,7 +184,7 @@ pub struct Settings {
     /// with feedback, the authors' [default 1000 for `dref`, 0 for `dref-authors`].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rank_window: Option<usize>,
-    /// Ask on at most this share of steps, in (0, 1]; 0: no ceiling, the authors' [default 0.05
+    /// Ask on at most this share of steps, in (0, 1]; 0: no ceiling, the authors' [default 0.1
     /// for `dref`, 0 for `dref-authors`].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_feedback_rate: Option<f64>,

@@ -6,34 +6,33 @@
 #   nohup bash benches/grids/dref_grids.sh /work/grid/bin/dualrep-<commit> /work/grid > /work/grid/lanes.log 2>&1 &
 #
 # then copy finished runs (config.json, metrics.csv, summary.json) into docs/results/ as the
-# READMEs there say. Lane A: the product's DREF and what it is compared with on Reaching and
-# Placing (docs/results/fig3), then its ablation (docs/dref.md); lane B: Placing's product DREF,
-# then the as-run grid (docs/results/fig3-as-run), then Lunar Lander at 150k.
+# READMEs there say. Lane A: the product's DREF on Placing and what it is compared with
+# (docs/results/fig3), then its ablation (docs/dref.md); lane B: Lunar Lander at 150k (the long
+# pole), then the as-run grid (docs/results/fig3-as-run).
 set -euo pipefail
 bin=${1:?the dualrep binary}
 out=${2:?the scratch folder}
 run() { nice -n 10 "$bin" --threads 1 reproduce fig3 --jobs 1 "$@"; }
 
 lane_a() {
-  run --tasks reaching --seeds 10 --methods dref,ef-dref --out "$out/fig3"
-  # Reaching's stalls under the product rule (docs/results/fig3/README.md): its rule without
-  # the mask, and the authors' rule with it.
-  run --tasks reaching --seeds 10 --methods dref --set human_critic_mask=false --out "$out/ablation-unmasked"
-  run --tasks reaching --seeds 10 --methods dref-masked --out "$out/fig3"
-  # Seeds 5-9 of the rows reused from the committed 5 seeds (copy those into "$out/fig3" first).
-  run --tasks reaching,placing --seeds 10 --methods ef-100,sac,dref-authors --out "$out/fig3"
-  run --tasks placing --seeds 10 --methods dref-masked --out "$out/fig3"
+  # Placing's product rule (10 % ceiling since 2026-11-26; the 5 % runs are a row of the
+  # ablation, docs/results/dref-ablation/ceiling-5/) and EF at its rate.
+  run --tasks placing --seeds 10 --methods dref,ef-dref --out "$out/fig3"
+  # Seeds 5-9 of the rows reused from the committed 5 seeds (copy those into "$out/fig3" first;
+  # Reaching's seeds 5-9 ran on 2026-11-26).
+  run --tasks placing --seeds 10 --methods ef-100,sac,dref-authors,dref-masked --out "$out/fig3"
+  # The ablation's single changes on Placing (docs/dref.md), each over the authors' rule.
   run --tasks placing --seeds 10 --methods dref-authors --set rank_window=1000 --out "$out/ablation-window"
-  run --tasks placing --seeds 10 --methods dref-authors --set max_feedback_rate=0.05 --out "$out/ablation-ceiling"
-  # The ceiling's level (docs/results/dref-ablation/README.md: Placing seed 1 learns at 10 %).
-  run --tasks placing --seeds 10 --methods dref --set max_feedback_rate=0.1 --out "$out/ablation-ceiling-10"
+  run --tasks placing --seeds 10 --methods dref-authors --set max_feedback_rate=0.1 --out "$out/ablation-ceiling"
+  # The silence wake (built, not yet measured): the masked authors' rule, woken after 1,000
+  # silent steps, within the product's ceiling.
+  run --tasks placing,reaching --seeds 10 --methods dref --set rank_window=0 --set wake_after=1000 --out "$out/ablation-wake"
 }
 
 lane_b() {
-  run --tasks placing --seeds 10 --methods dref,ef-dref --out "$out/fig3"
+  run --tasks lunar-lander --seeds 5 --methods dref,ef-dref --out "$out/fig3-lunar-lander-150k"
   run --tasks reaching,placing --seeds 10 --methods dref-authors,ef-100,sac,ef-dref-authors \
     --set profile=as-run --out "$out/as-run"
-  run --tasks lunar-lander --seeds 5 --methods dref,ef-dref --out "$out/fig3-lunar-lander-150k"
   run --tasks lunar-lander --seeds 5 --methods dref-authors,ef-100,ef-dref-authors \
     --set profile=as-run --out "$out/as-run"
 }

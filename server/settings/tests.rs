@@ -400,7 +400,7 @@ fn the_products_dref_and_the_authors_differ_only_in_their_three_switches() {
     assert_eq!(authors.query_rule.rank_window, 0);
     assert_eq!(
         dref.query_rule.ceiling.map(|c| (c.rate, c.burst)),
-        Some((0.05, 20))
+        Some((0.1, 20))
     );
     assert_eq!(authors.query_rule.ceiling, None);
     // Switched off one by one, the product's rule is the authors' (but for the method's name).
