@@ -47,6 +47,7 @@ fn train_run(task: Task, method: &str, seed: u64, steps: u64, ends: &[(u64, f64)
             wall_seconds: None,
             updates_per_second: None,
             longest_flood_after_2k: None,
+            config: Default::default(),
         },
     }
 }

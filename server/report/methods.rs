@@ -179,6 +179,59 @@ pub fn published_ratio(task: Task, method: Fig3Method) -> Option<f64> {
     Some(published_fig3(task, method)?.cumulative_k / ef100)
 }
 
+/// A ratio to EF-100 with its standard error over runs, where the decoding gives one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AuthorsRatio {
+    pub mean: f64,
+    pub se: Option<f64>,
+}
+
+/// The authors' own ratios to EF-100, decoded from their result files
+/// (`docs/results/authors-runs/summary.csv`, `benches/reference/authors_runs.py`): over the runs
+/// each published curve was drawn from, and over every run of the batches those came from.
+/// Rows: the authors' DREF, EF-100, EF-50, EF-25, SAC, EF at DREF's rate. EF-50's and EF-25's
+/// are ratios of means (the decoding gives no error for them).
+pub fn authors_ratios(task: Task, method: Fig3Method) -> Option<(AuthorsRatio, AuthorsRatio)> {
+    let r = |mean: f64, se: f64| AuthorsRatio { mean, se: Some(se) };
+    let plain = |mean: f64| AuthorsRatio { mean, se: None };
+    let row = match method {
+        Fig3Method::DrefAuthors => 0,
+        Fig3Method::Ef100 => 1,
+        Fig3Method::Ef50 => 2,
+        Fig3Method::Ef25 => 3,
+        Fig3Method::Sac | Fig3Method::SacUnscaled => 4,
+        Fig3Method::EfMatched(_) => 5,
+        Fig3Method::Dref | Fig3Method::DrefMasked => return None,
+    };
+    let table: [(AuthorsRatio, AuthorsRatio); 6] = match task {
+        Task::LunarLander => [
+            (r(1.170, 0.117), r(0.924, 0.149)),
+            (r(1.0, 0.0), r(1.0, 0.0)),
+            (plain(0.760), plain(0.753)),
+            (plain(0.642), plain(0.433)),
+            (r(0.603, 0.066), r(0.603, 0.066)),
+            (r(-0.205, 0.109), r(-0.205, 0.109)),
+        ],
+        Task::Reaching => [
+            (r(0.995, 0.026), r(0.815, 0.031)),
+            (r(1.0, 0.0), r(1.0, 0.0)),
+            (plain(0.907), plain(0.927)),
+            (plain(0.840), plain(0.926)),
+            (r(0.543, 0.043), r(0.584, 0.031)),
+            (r(0.892, 0.054), r(0.900, 0.055)),
+        ],
+        Task::Placing => [
+            (r(0.992, 0.083), r(0.921, 0.345)),
+            (r(1.0, 0.0), r(1.0, 0.0)),
+            (plain(0.536), plain(1.255)),
+            (plain(0.543), plain(0.517)),
+            (r(0.376, 0.102), r(0.457, 0.210)),
+            (r(0.232, 0.094), r(0.395, 0.194)),
+        ],
+    };
+    Some(table[row])
+}
+
 /// The name under which the grid runs EF at a rate of `pct` percent: `ef-6.2`, `ef-0.35`.
 /// Two decimals at most, trailing zeros dropped, never one of the fixed baselines' names.
 pub fn matched_ef_method(pct: f64) -> String {

@@ -109,6 +109,7 @@ fn train(task: Task, label: &str, seed: u64, cumulative: f64) -> TrainRun {
             wall_seconds: None,
             updates_per_second: None,
             longest_flood_after_2k: None,
+            config: Default::default(),
         },
     }
 }

@@ -61,6 +61,26 @@ pub struct TrainSummary {
     /// written before it was measured).
     #[serde(default)]
     pub longest_flood_after_2k: Option<u64>,
+    /// The run's configuration as it ran (only what the report reads).
+    #[serde(default)]
+    pub config: RunConfigSeen,
+}
+
+/// What the report reads of a run's configuration.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+pub struct RunConfigSeen {
+    /// `reset` for the authors' runs as run (`profile = "as-run"` sets it on every task).
+    #[serde(default)]
+    pub graph_at_episode_end: crate::guidance::evaluative_run::GraphAtEpisodeEnd,
+}
+
+impl TrainRun {
+    /// Whether the run ran the authors' runs' behaviour at episode ends, which every task's
+    /// `profile = "as-run"` has (and the head's constants do not).
+    pub fn ran_as_run(&self) -> bool {
+        self.summary.config.graph_at_episode_end
+            == crate::guidance::evaluative_run::GraphAtEpisodeEnd::Reset
+    }
 }
 
 /// One row of `alignment.csv`: the belief after a query.
@@ -238,4 +258,36 @@ fn subdirs(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
 
 fn name_of(path: &Path) -> Option<String> {
     path.file_name()?.to_str().map(str::to_owned)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn summary(config: &str) -> TrainSummary {
+        serde_json::from_str(&format!(
+            r#"{{"task": "placing", "method": "dref-authors", "seed": 0, "steps": 10,
+                "cumulative_return": 0.0, "feedback_count": 1, "feedback_fraction": 0.1,
+                "final_mean_return": 0.0{config}}}"#
+        ))
+        .unwrap()
+    }
+
+    #[test]
+    fn a_run_of_the_as_run_profile_is_told_by_its_graph_at_episode_end() {
+        let run = |config: &str| TrainRun {
+            key: RunKey {
+                task: Task::Placing,
+                method: "dref-authors".into(),
+                seed: 0,
+            },
+            episodes: Vec::new(),
+            summary: summary(config),
+        };
+        assert!(run(r#", "config": {"graph_at_episode_end": "reset", "seed": 0}"#).ran_as_run());
+        assert!(!run(r#", "config": {"graph_at_episode_end": "step"}"#).ran_as_run());
+        // Runs written before the setting existed, or without a config, ran the head's way.
+        assert!(!run(r#", "config": {"task": "placing"}"#).ran_as_run());
+        assert!(!run("").ran_as_run());
+    }
 }

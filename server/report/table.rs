@@ -5,8 +5,8 @@ use std::fmt::Write;
 
 use super::aggregate::{Fig3Task, Fig5Task};
 use super::methods::{
-    Fig3Method, Published, display_name, matched_ef_method, paper_steps, published_fig3,
-    published_ratio, task_title,
+    AuthorsRatio, Fig3Method, Published, authors_ratios, display_name, matched_ef_method,
+    paper_steps, published_fig3, published_ratio, task_title,
 };
 use super::rank_test::mann_whitney_greater;
 use super::stats::MeanSe;
@@ -79,11 +79,34 @@ fn fmt_ratio(value: Option<f64>, reference: Option<f64>) -> String {
     }
 }
 
+const AS_RUN_INTRO: &str = "\
+These runs ran the authors' runs as run (`profile = \"as-run\"`), so two more columns read them \
+against the authors' own result files (`docs/results/authors-runs/`): the ratio over the runs \
+each published curve was drawn from, and over every run of the batches those came from.
+";
+
+/// The authors' plotted and all-runs ratios of `kind` on `task`, as two table cells.
+fn authors_cells(task: crate::sim::Task, kind: Option<Fig3Method>) -> String {
+    let cell = |r: AuthorsRatio| match r.se {
+        Some(se) => format!("{:.2} ± {:.2}", r.mean, se),
+        None => format!("{:.2}", r.mean),
+    };
+    match kind.and_then(|k| authors_ratios(task, k)) {
+        Some((plotted, all)) => format!(" {} | {} |", cell(plotted), cell(all)),
+        None => " – | – |".into(),
+    }
+}
+
 /// The Figure 3 table: one section per task, rows in legend order, plus a row for every
-/// published method this grid has not run (so the paper's column is always complete).
-pub fn fig3_table(tasks: &[Fig3Task]) -> String {
+/// published method this grid has not run (so the paper's column is always complete). With
+/// `as_run` (a grid of the authors' runs as run), the authors' plotted and all-runs ratios too.
+pub fn fig3_table(tasks: &[Fig3Task], as_run: bool) -> String {
     let mut out = String::from("# Figure 3: cumulative reward during training\n\n");
     out.push_str(FIG3_INTRO);
+    if as_run {
+        out.push('\n');
+        out.push_str(AS_RUN_INTRO);
+    }
     for task in tasks {
         let mut steps: Vec<u64> = task.methods.iter().map(|m| m.steps).collect();
         steps.sort_unstable();
@@ -93,15 +116,30 @@ pub fn fig3_table(tasks: &[Fig3Task]) -> String {
             [first, .., last] => format!("{}–{}", fmt_steps(*first), fmt_steps(*last)),
             [] => "no".into(),
         };
+        let (authors_head, authors_rule) = if as_run {
+            (
+                " Authors' plotted ratio | Authors' all-runs ratio |",
+                "---:|---:|",
+            )
+        } else {
+            ("", "")
+        };
         let _ = write!(
             out,
             "\n## {}: {} steps (paper: {})\n\n\
-             | Method | Cumulative reward | Feedback | Seeds | Seeds that learn | Frozen | Longest flood after 2k | Ratio to EF-100% | Paper's ratio | Paper |\n\
-             |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+             | Method | Cumulative reward | Feedback | Seeds | Seeds that learn | Frozen | Longest flood after 2k | Ratio to EF-100% | Paper's ratio |{authors_head} Paper |\n\
+             |---|---:|---:|---:|---:|---:|---:|---:|---:|{authors_rule}---:|\n",
             task_title(task.task),
             ours,
             fmt_steps(paper_steps(task.task)),
         );
+        let authors = |kind: Option<Fig3Method>| {
+            if as_run {
+                authors_cells(task.task, kind)
+            } else {
+                String::new()
+            }
+        };
         let thousands = uses_thousands(task);
         let ef100 = task
             .methods
@@ -132,13 +170,14 @@ pub fn fig3_table(tasks: &[Fig3Task]) -> String {
                 ("–".into(), "–".into())
             };
             let row = format!(
-                "| {name} | {} | {} | {} | {} | {frozen} | {flood} | {} | {} | {paper} |\n",
+                "| {name} | {} | {} | {} | {} | {frozen} | {flood} | {} | {} |{} {paper} |\n",
                 fmt_reward(m.final_return, thousands),
                 fmt_pct(m.feedback_pct),
                 m.final_return.n,
                 m.seeds_learned,
                 fmt_ratio(Some(m.final_return.mean), ef100),
                 fmt_ratio(paper_ratio, Some(1.0)),
+                authors(kind),
             );
             rows.push((kind.map_or(100, Fig3Method::rank), row));
         }
@@ -172,7 +211,13 @@ pub fn fig3_table(tasks: &[Fig3Task]) -> String {
                 let ratio = fmt_ratio(published_ratio(task.task, kind), Some(1.0));
                 rows.push((
                     kind.rank(),
-                    format!("| {name} | – | – | 0 | – | – | – | – | {ratio} | {paper} |\n"),
+                    format!(
+                        "| {name} | – | – | 0 | – | – | – | – | {ratio} |{} {paper} |\n",
+                        authors(Some(match kind {
+                            Fig3Method::Dref => Fig3Method::DrefAuthors,
+                            other => other,
+                        }))
+                    ),
                 ));
             }
         }

@@ -57,7 +57,7 @@ fn report_fig3_table_puts_the_papers_values_beside_ours() {
             matched,
         ],
     }];
-    let text = fig3_table(&tasks);
+    let text = fig3_table(&tasks, false);
     let expected = "\
 ## Lunar-Lander: 150k steps (paper: 150k)
 
@@ -101,10 +101,13 @@ fn report_fig3_table_lists_each_dref_runs_pacing() {
     ];
     let mut sac = fig3_row("sac", ms(5.0, 1.0, 2), ms(0.0, 0.0, 2));
     sac.runs = dref.runs.clone();
-    let text = fig3_table(&[Fig3Task {
-        task: Task::Placing,
-        methods: vec![dref, sac],
-    }]);
+    let text = fig3_table(
+        &[Fig3Task {
+            task: Task::Placing,
+            methods: vec![dref, sac],
+        }],
+        false,
+    );
     let expected = "\
 DREF, per run:
 
@@ -123,10 +126,13 @@ fn report_fig3_table_names_a_missing_matched_baseline_and_shows_step_ranges() {
     short.steps = 2_000;
     let mut long = fig3_row("dref", ms(9.0, 1.0, 2), ms(1.6, 0.1, 2));
     long.steps = 100_000;
-    let text = fig3_table(&[Fig3Task {
-        task: Task::Reaching,
-        methods: vec![long, short],
-    }]);
+    let text = fig3_table(
+        &[Fig3Task {
+            task: Task::Reaching,
+            methods: vec![long, short],
+        }],
+        false,
+    );
     assert!(
         text.contains("## Reaching-Sim: 2k–100k steps (paper: 100k)"),
         "{text}"
@@ -138,6 +144,49 @@ fn report_fig3_table_names_a_missing_matched_baseline_and_shows_step_ranges() {
     assert!(
         text.contains(
             "| DREF | 9 ± 1 | 1.6 ± 0.1 % | 2 | 0 | 0.0 ± 0.0 % | 0 | – | 1.00 | 11.4k (1.6 %) |"
+        ),
+        "{text}"
+    );
+}
+
+#[test]
+fn report_fig3_table_of_the_runs_as_run_reads_them_against_the_authors_own_runs() {
+    let rows = || {
+        vec![
+            fig3_row("dref-authors", ms(9.0, 1.0, 2), ms(1.6, 0.1, 2)),
+            fig3_row("ef-100", ms(10.0, 1.0, 2), ms(100.0, 0.0, 2)),
+        ]
+    };
+    let plain = fig3_table(
+        &[Fig3Task {
+            task: Task::Reaching,
+            methods: rows(),
+        }],
+        false,
+    );
+    assert!(!plain.contains("all-runs"), "{plain}");
+    let text = fig3_table(
+        &[Fig3Task {
+            task: Task::Reaching,
+            methods: rows(),
+        }],
+        true,
+    );
+    assert!(
+        text.contains(
+            "| Paper's ratio | Authors' plotted ratio | Authors' all-runs ratio | Paper |"
+        ),
+        "{text}"
+    );
+    // Reaching's DREF: 1.00 as published, 0.815 over all 33 finished runs of its batches.
+    assert!(
+        text.contains("| 0.90 | 1.00 | 0.99 ± 0.03 | 0.81 ± 0.03 | 11.4k (1.6 %) |"),
+        "{text}"
+    );
+    // A row the grid has not run still shows the authors' numbers (SAC).
+    assert!(
+        text.contains(
+            "| SAC | – | – | 0 | – | – | – | – | 0.54 | 0.54 ± 0.04 | 0.58 ± 0.03 | 6.2k |"
         ),
         "{text}"
     );
