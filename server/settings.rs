@@ -549,6 +549,7 @@ impl Settings {
     }
 }
 
-/// The human critic's config, switched on (with defaults) if it was off.
+#[cfg(test)]
+mod pinned;
 #[cfg(test)]
 mod tests;
