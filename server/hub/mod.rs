@@ -111,6 +111,7 @@ impl Hub {
     /// (this server's, unless the launch named them), so that a resume replays it bit for bit.
     pub async fn launch(self: &Arc<Self>, mut spec: SessionSpec) -> Result<SessionRow, HubError> {
         spec.params
+            .session
             .kernels
             .get_or_insert_with(crate::rl::kernels::default_path);
         spec.validate().map_err(HubError::Invalid)?;

@@ -215,7 +215,7 @@ impl SessionSpec {
             (Some(env), _) => env.validate().map_err(|e| format!("env: {e}"))?,
             (None, Some(_)) => {}
         }
-        if self.env.is_none() && self.params.env_timeout_s.is_some() {
+        if self.env.is_none() && self.params.session.env_timeout_s.is_some() {
             return Err(
                 "env_timeout_s applies to sessions on a remote env (env: {\"url\": ...})".into(),
             );
