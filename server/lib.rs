@@ -22,10 +22,13 @@
 //! - [`guidance`]: when to ask (DREF's UCB query rule, EF-p%, a person's pace), who answers
 //!   (the `EvaluativeTrainer` trait, the expert oracle, simulated teachers' faults), the
 //!   evaluative training loop, what to ask (DRPL), and how much trainers agree.
-//! - [`settings`]: every setting by name as one typed list (`Settings`), read by launch
-//!   requests, `--set`/TOML, `GET /api/tasks` and the dashboard; validated once.
+//! - [`settings`]: every setting by name (`Settings`: flat keys to users, one section per
+//!   family inside, the key list read from the sections), read by launch requests, `--set`/TOML,
+//!   `GET /api/tasks` and the dashboard.
 //! - [`session`]: one training session as a plain loop on its own thread, talking to the
-//!   server only through channels; pacing, queries to people, replay of stored answers on
+//!   server only through channels; its `SessionPlan` (spec, session settings, run config, scene
+//!   graph, query kind) is validated once, at launch or resume, and shared by the hub, the
+//!   thread and the trainer's `hello`; pacing, queries to people, replay of stored answers on
 //!   resume (on a remote env, which cannot replay, its latest whole-run checkpoint instead),
 //!   checkpoints. No async runtime, no database.
 //!

@@ -10,7 +10,7 @@ mod export;
 mod grid_executor;
 mod loadtest;
 mod output;
-mod overrides;
+pub(crate) mod overrides;
 mod prefs;
 mod progress;
 mod remote;

@@ -101,15 +101,21 @@ mod tests {
         )
         .unwrap();
         let file = read_toml(&path).unwrap();
-        assert_eq!(file.hidden, Some(vec![32, 32]));
-        assert_eq!((file.c, file.ucb), (Some(0.25), Some(UcbForm::Paper)));
-        assert_eq!(file.human_critic_mask, Some(true));
+        assert_eq!(file.sac.hidden, Some(vec![32, 32]));
+        assert_eq!(
+            (file.query_rule.c, file.query_rule.ucb),
+            (Some(0.25), Some(UcbForm::Paper))
+        );
+        assert_eq!(file.human_critic.human_critic_mask, Some(true));
         let args = OverrideArgs {
             overrides: vec![("c".into(), "0.5".into())],
             config: Some(path.clone()),
         };
         let merged = args.settings().unwrap();
-        assert_eq!((merged.c, merged.hidden), (Some(0.5), Some(vec![32, 32])));
+        assert_eq!(
+            (merged.query_rule.c, merged.sac.hidden),
+            (Some(0.5), Some(vec![32, 32]))
+        );
         let session = OverrideArgs {
             overrides: vec![("pace_hz".into(), "5".into())],
             config: None,

@@ -62,8 +62,9 @@ pub struct QueryRule {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     budget: Option<AskBudget>,
     /// Rank among the states of a long silence once it has lasted (`None`: never, the authors').
+    /// Boxed: most rules have none, and the schedule that holds a rule stays small.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    wake: Option<SilenceWake>,
+    wake: Option<Box<SilenceWake>>,
 }
 
 /// The steps since the rule last asked, and the states visited in the last `after` of them:
@@ -111,7 +112,7 @@ impl QueryRule {
     /// After `steps` without a query, rank among the states visited during the silence until
     /// the next query (the authors' ranking otherwise).
     pub fn waking_after(mut self, steps: u64) -> Self {
-        self.wake = Some(SilenceWake::new(steps));
+        self.wake = Some(Box::new(SilenceWake::new(steps)));
         self
     }
 

@@ -121,7 +121,7 @@ impl Owner {
                 alignment_of_mean,
             } => {
                 // Against the synthetic trainer's theta: meaningless for people.
-                if self.spec.trainer == TrainerKind::Synthetic {
+                if self.plan.spec.trainer == TrainerKind::Synthetic {
                     self.progress.alignment = Some(alignment);
                     let row = AlignmentRow {
                         queries: queries as i64,

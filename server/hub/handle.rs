@@ -7,7 +7,7 @@ use std::sync::Arc;
 use tokio::sync::{broadcast, mpsc, oneshot, watch};
 
 use crate::protocol::{ProgressMessage, ProtocolError, QueryId};
-use crate::session::AnswerValue;
+use crate::session::{AnswerValue, SessionPlan};
 use crate::sim::Geometry;
 use crate::store::{Status, TrainerRef};
 
@@ -98,6 +98,8 @@ pub struct SessionHandle {
     pub id: Arc<str>,
     pub(super) commands: mpsc::UnboundedSender<Command>,
     pub(super) snapshot: watch::Receiver<Snapshot>,
+    /// The session as it was launched or resumed (what the trainer's `hello` says).
+    pub plan: Arc<SessionPlan>,
 }
 
 impl SessionHandle {

@@ -36,7 +36,7 @@ use tokio::task::JoinHandle;
 pub use answers::UNDO_WINDOW;
 pub use handle::{AnswerReply, Identity, Joined, SessionHandle, Snapshot};
 
-use crate::session::SessionSpec;
+use crate::session::{SessionPlan, SessionSpec};
 use crate::store::{NewSession, SessionRow, Status, Store};
 
 /// How the hub runs sessions.
@@ -101,7 +101,8 @@ impl Hub {
         let (interrupted, queued) = self.store.recover_after_restart().await?;
         for id in queued {
             if let Some(row) = self.store.session(&id).await? {
-                self.start(row).await?;
+                let plan = plan_of(&row)?;
+                self.start(row, plan).await?;
             }
         }
         Ok(interrupted)
@@ -111,12 +112,14 @@ impl Hub {
     /// (this server's, unless the launch named them), so that a resume replays it bit for bit.
     pub async fn launch(self: &Arc<Self>, mut spec: SessionSpec) -> Result<SessionRow, HubError> {
         spec.params
+            .session
             .kernels
             .get_or_insert_with(crate::rl::kernels::default_path);
-        spec.validate().map_err(HubError::Invalid)?;
+        let plan = SessionPlan::new(spec).map_err(|e| HubError::Invalid(e.0))?;
+        let spec = &plan.spec;
         let id = random_hex(6);
         let token = random_hex(16);
-        let config = serde_json::to_value(&spec).expect("specs serialise");
+        let config = serde_json::to_value(spec).expect("specs serialise");
         let method = spec.method.to_string();
         let trainer = serde_json::to_value(spec.trainer).expect("kinds serialise");
         let row = self
@@ -132,7 +135,7 @@ impl Hub {
                 trainer_token: &token,
             })
             .await?;
-        self.start(row.clone()).await?;
+        self.start(row.clone(), plan).await?;
         Ok(row)
     }
 
@@ -154,14 +157,13 @@ impl Hub {
     }
 
     /// Queue a stored session under a new owner (stored as `queued` before this returns).
-    async fn start(self: &Arc<Self>, row: SessionRow) -> Result<(), HubError> {
-        let spec = row.spec().map_err(HubError::Invalid)?;
-        let timeout = spec.settings().map_err(HubError::Invalid)?.answer_timeout_s;
+    async fn start(self: &Arc<Self>, row: SessionRow, plan: SessionPlan) -> Result<(), HubError> {
+        let timeout = Duration::from_secs_f64(plan.settings.answer_timeout_s);
         let (mut owner, handle, commands) = owner::Owner::new(
             self.clone(),
             row.id.clone(),
-            spec,
-            Duration::from_secs_f64(timeout),
+            plan,
+            timeout,
             u64::try_from(row.progress).unwrap_or(0),
         );
         {
@@ -216,7 +218,8 @@ impl Hub {
                 status.as_str()
             )));
         }
-        self.start(row).await?;
+        let plan = plan_of(&row)?;
+        self.start(row, plan).await?;
         let row = self
             .store
             .session(id)
@@ -301,6 +304,13 @@ impl Hub {
         .map_err(std::io::Error::other)??;
         Ok(relative)
     }
+}
+
+/// A stored session's plan, read and checked once more as it starts again (a resume, or a
+/// queued session after a restart).
+fn plan_of(row: &SessionRow) -> Result<SessionPlan, HubError> {
+    let spec = row.spec().map_err(HubError::Invalid)?;
+    SessionPlan::new(spec).map_err(|e| HubError::Invalid(e.0))
 }
 
 #[cfg(test)]

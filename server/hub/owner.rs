@@ -19,7 +19,7 @@ use super::episode_frames::EpisodeFrames;
 use super::handle::{Command, Identity, Joined, SessionHandle, Snapshot};
 use crate::protocol::{ProgressMessage, QueryId, QueryKind, ServerMessage, WithdrawReason};
 use crate::session::combine::Combine;
-use crate::session::{AnswerValue, Control, Ending, SessionEvent, SessionSpec};
+use crate::session::{AnswerValue, Control, Ending, SessionEvent, SessionPlan};
 use crate::sim::Geometry;
 use crate::store::{Status, Store, SyntheticAnswer, TrainerRef};
 
@@ -71,7 +71,8 @@ pub(super) struct Owner {
     key: Arc<str>,
     pub store: Store,
     pub id: String,
-    pub spec: SessionSpec,
+    /// The session, read and checked when it was launched or resumed.
+    pub plan: Arc<SessionPlan>,
     pub kind: QueryKind,
     pub answer_timeout: Duration,
     /// Answers each query takes from different named trainers (1: the first one wins).
@@ -114,18 +115,16 @@ impl Owner {
     pub fn new(
         hub: Arc<Hub>,
         id: String,
-        spec: SessionSpec,
+        plan: SessionPlan,
         answer_timeout: Duration,
         resumed_at: u64,
     ) -> (Self, SessionHandle, UnboundedReceiver<Command>) {
-        // Validated at launch: a stored session's settings read back.
-        let (answers_per_query, combine) = spec
-            .settings()
-            .map_or((1, Combine::First), |s| (s.answers_per_query, s.combine));
+        let plan = Arc::new(plan);
+        let (answers_per_query, combine) = (plan.settings.answers_per_query, plan.settings.combine);
         let progress = ProgressMessage {
             progress: resumed_at,
-            budget: spec.budget,
-            unit: spec.method.budget_unit(),
+            budget: plan.spec.budget,
+            unit: plan.spec.method.budget_unit(),
             ..Default::default()
         };
         let (snapshot, snapshot_rx) = watch::channel(Snapshot {
@@ -142,14 +141,15 @@ impl Owner {
             id: id.as_str().into(),
             commands,
             snapshot: snapshot_rx,
+            plan: plan.clone(),
         };
         let owner = Self {
             key: handle.id.clone(),
             store: hub.store.clone(),
             hub,
-            kind: spec.method.query_kind(),
+            kind: plan.kind,
             id,
-            spec,
+            plan,
             answer_timeout,
             answers_per_query,
             combine,

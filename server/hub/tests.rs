@@ -14,7 +14,7 @@ use super::owner::Owner;
 use super::{Hub, HubConfig, UNDO_WINDOW};
 use crate::protocol::ErrorCode;
 use crate::session::{
-    AnswerValue, Answerer, Control, QueryContent, QueryData, SessionEvent, SessionSpec,
+    AnswerValue, Answerer, Control, QueryContent, QueryData, SessionEvent, SessionPlan, SessionSpec,
 };
 use crate::store::{AddTrainer, NewSession, Status, Store, TrainerOrigin};
 
@@ -86,7 +86,13 @@ async fn harness_with(params: serde_json::Value) -> Harness {
         })
         .await
         .unwrap();
-    let (mut owner, handle, commands) = Owner::new(hub, "s1".into(), spec, TIMEOUT, 0);
+    let (mut owner, handle, commands) = Owner::new(
+        hub,
+        "s1".into(),
+        SessionPlan::new(spec).unwrap(),
+        TIMEOUT,
+        0,
+    );
     let (control_tx, controls) = std::sync::mpsc::channel();
     owner.control = Some(control_tx);
     let (events, events_rx) = unbounded_channel();

@@ -10,7 +10,7 @@ use super::owner::Owner;
 use super::remote::{RemotePlan, keep_earlier_recording};
 use super::{recording, sink};
 use crate::record::RecordingOptions;
-use crate::session::{Controls, Ending, SessionContext, SessionEvent, run_session};
+use crate::session::{Controls, Ending, SessionContext, SessionEvent, SessionPlan, run_session};
 
 impl Owner {
     /// Start the session thread; its events arrive on the returned channel, which closes when
@@ -29,11 +29,12 @@ impl Owner {
         };
         // A checkpoint is checked only if the replay reaches it with stored answers alone (a
         // session on a remote env resumes from its checkpoint instead).
+        let plan = SessionPlan::clone(&self.plan);
         let verify = checkpoint
-            .filter(|c| c.answers as usize <= stored_answers.len() && self.spec.env.is_none())
+            .filter(|c| c.answers as usize <= stored_answers.len() && plan.spec.env.is_none())
             .map(|c| (c.progress as u64, c.digest));
-        let settings = self.spec.settings()?;
-        let remote = match &self.spec.env {
+        let settings = &plan.settings;
+        let remote = match &plan.spec.env {
             None => None,
             Some(target) => Some(RemotePlan {
                 target: target.clone(),
@@ -50,9 +51,9 @@ impl Owner {
             path: settings.record.then(|| self.hub.recording_path(&id)),
             connect: settings
                 .rerun_connect
+                .clone()
                 .or_else(|| self.hub.config.rerun_connect.clone()),
         };
-        let graph = self.spec.scene_graph()?;
         let (control_tx, control_rx) = std::sync::mpsc::channel();
         let (event_tx, event_rx) = tokio::sync::mpsc::unbounded_channel();
         let ctx = SessionContext {
@@ -65,7 +66,6 @@ impl Owner {
             observer: None,
             remote: None,
         };
-        let spec = self.spec.clone();
         let mut builder = std::thread::Builder::new().name(format!("session-{id}"));
         if let Some(bytes) = self.hub.config.session_stack_size {
             builder = builder.stack_size(bytes);
@@ -76,16 +76,17 @@ impl Owner {
         builder
             .spawn(move || {
                 let mut ctx = ctx;
+                let mut plan = plan;
                 // Reaching a remote env is blocking IO too: here, with a deadline.
-                let mut graph = graph;
-                if let Some(plan) = remote {
-                    match plan.connect(&spec) {
+                if let Some(remote) = remote {
+                    match remote.connect(&plan.spec) {
                         Ok(r) => {
-                            if spec.task.is_none() {
-                                graph = r.description.graph;
-                            }
+                            plan = match plan.on_remote(&r.description) {
+                                Ok(plan) => plan,
+                                Err(e) => return failed(e.0),
+                            };
                             let from_checkpoint =
-                                r.resume_from.is_some() && !spec.method.is_preference();
+                                r.resume_from.is_some() && !plan.spec.method.is_preference();
                             if let (true, Some(path)) = (from_checkpoint, &options.path)
                                 && let Err(e) = keep_earlier_recording(path)
                             {
@@ -98,12 +99,12 @@ impl Owner {
                 }
                 // Opening the file (and a viewer connection) is blocking IO: here, not on the
                 // async runtime.
-                match recording::start(&id, graph, &options) {
+                match recording::start(&id, plan.graph, &options) {
                     Ok(observer) => ctx.observer = observer,
                     Err(e) => return failed(format!("the recording could not start: {e:#}")),
                 }
                 let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    run_session(&spec, ctx)
+                    run_session(plan, ctx)
                 }));
                 if let Err(panic) = result {
                     let what = panic

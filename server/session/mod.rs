@@ -2,12 +2,14 @@
 //! through channels (`events`), so it runs unchanged under the server, in tests and headless.
 //!
 //! - `spec`: what a session is (task, method, trainer kind, seed, budget, parameters).
+//! - `plan`: a spec read and checked once, at launch or resume: what the hub, the thread and
+//!   the trainer's `hello` share.
 //! - `events`: what the loop reports and the controls it obeys; answer values.
 //! - `combine`: how several trainers' answers to one query become the one the learner takes.
 //! - `query`: what a person is shown (clips, predicates).
 //! - `asker`: who answers: stored answers, people through the control channel, or a synthetic
 //!   trainer; the observer sees every query and answer.
-//! - `runner`: builds the run from its spec; `evaluative_loop` and `preference_loop` drive it:
+//! - `runner`: runs the plan; `evaluative_loop` and `preference_loop` drive it:
 //!   pacing, frames, asking, replaying stored answers, checkpoints.
 //! - `remote`: a session on an env in another process, which resumes from its latest
 //!   checkpoint instead of replaying from step 0.
@@ -16,6 +18,7 @@ mod asker;
 pub mod combine;
 mod evaluative_loop;
 pub mod events;
+pub mod plan;
 mod preference_loop;
 pub mod query;
 pub mod remote;
@@ -27,6 +30,7 @@ pub use events::{
     AnswerValue, Answerer, Checkpoint, Control, Controls, Ending, Frame, Observer, QueryKind,
     Revision, SessionEvent, SessionSink, StoredRevision,
 };
+pub use plan::{PlanError, SessionPlan};
 pub use query::{Clip, QueryContent, QueryData, SegmentData};
 pub use remote::{QueryNumbering, Reconnect, RemoteSession};
 pub use runner::{SessionContext, digest, run_session};

@@ -1,5 +1,5 @@
-//! The session loop: builds the run from its spec and drives it on the calling thread (the
-//! server gives each session its own), pacing human sessions to a watchable rate, streaming
+//! The session loop: drives a session's plan on the calling thread (the server gives each
+//! session its own), pacing human sessions to a watchable rate, streaming
 //! frames, asking people through the control channel, replaying stored answers after a resume,
 //! and checkpointing. The loops themselves are in `evaluative_loop` and `preference_loop`.
 
@@ -12,11 +12,12 @@ use super::events::{
     AnswerValue, Controls, Ending, Halt, Observer, Revision, SessionEvent, SessionSink,
     StoredRevision,
 };
+use super::plan::SessionPlan;
 use super::remote::RemoteSession;
-use super::spec::{RunConfig, SessionSpec};
+use super::spec::RunConfig;
 use super::{evaluative_loop, preference_loop};
 
-/// Everything a session thread gets besides its spec.
+/// Everything a session thread gets besides its plan.
 pub struct SessionContext {
     pub sink: Arc<dyn SessionSink>,
     pub controls: Controls,
@@ -35,16 +36,18 @@ pub struct SessionContext {
 }
 
 /// Run the session to its end and report how it ended (also sent as `SessionEvent::Ended`).
+/// On a remote env, `plan` is the one on the env connected in `ctx`
+/// ([`SessionPlan::on_remote`]).
 ///
 /// The learner computes with the session's kernels (or kernels of the same numerics) on this
 /// thread, and counts as active while it runs, so that sessions running at once share the
 /// cores between their products.
-pub fn run_session(spec: &SessionSpec, ctx: SessionContext) -> Ending {
+pub fn run_session(plan: SessionPlan, ctx: SessionContext) -> Ending {
     let sink = ctx.sink.clone();
-    let ending = match session_kernels(spec) {
+    let ending = match session_kernels(&plan) {
         Ok(path) => {
             let _active = kernels::ActiveLearner::register();
-            match kernels::with_path(path, || run(spec, ctx)) {
+            match kernels::with_path(path, || run(plan, ctx)) {
                 Ok(ending) => ending,
                 Err(reason) => Ending::Failed(reason),
             }
@@ -55,9 +58,9 @@ pub fn run_session(spec: &SessionSpec, ctx: SessionContext) -> Ending {
     ending
 }
 
-/// The kernels to run `spec` with: those it was launched with, or others of the same numerics.
-fn session_kernels(spec: &SessionSpec) -> Result<KernelPath, String> {
-    match spec.settings()?.kernels {
+/// The kernels to run `plan` with: those it was launched with, or others of the same numerics.
+fn session_kernels(plan: &SessionPlan) -> Result<KernelPath, String> {
+    match plan.settings.kernels {
         None => Ok(kernels::default_path()),
         Some(path) => path.available_equivalent().ok_or_else(|| {
             format!("the session computes with the {path} kernels, which this CPU cannot run")
@@ -67,18 +70,23 @@ fn session_kernels(spec: &SessionSpec) -> Result<KernelPath, String> {
 
 /// Builds the run and drives it. The observer (the recording) goes with the trainer and is
 /// dropped, and so flushed, before the session reports its end.
-fn run(spec: &SessionSpec, mut ctx: SessionContext) -> Result<Ending, String> {
+fn run(plan: SessionPlan, mut ctx: SessionContext) -> Result<Ending, String> {
     let observer = ctx.observer.take();
     let remote = ctx.remote.take();
-    if spec.env.is_some() != remote.is_some() {
+    if plan.spec.env.is_some() != remote.is_some() {
         return Err("a session on a remote env needs its env connected (and only such one)".into());
     }
-    let settings = spec.settings()?;
-    match spec.run_config_on(remote.as_ref().map(|r| &r.description))? {
+    let SessionPlan {
+        spec,
+        settings,
+        run,
+        ..
+    } = plan;
+    match run {
         RunConfig::Evaluative(config) => {
-            evaluative_loop::run(spec, settings, config, remote, ctx, observer)
+            evaluative_loop::run(&spec, settings, config, remote, ctx, observer)
         }
-        RunConfig::Preference(config) => preference_loop::run(spec, config, remote, ctx, observer),
+        RunConfig::Preference(config) => preference_loop::run(&spec, config, remote, ctx, observer),
     }
 }
 

@@ -135,28 +135,31 @@ pub enum RunConfig {
     Preference(PreferenceRunConfig),
 }
 
-impl SessionSpec {
-    /// The session settings, with defaults for those not given.
-    pub fn settings(&self) -> Result<SessionSettings, String> {
-        self.params.session()
+impl RunConfig {
+    /// The scene graph the session's queries are phrased in (its `side_engines_on_a0` override
+    /// included).
+    pub fn scene_graph(&self) -> SceneGraph {
+        match self {
+            RunConfig::Evaluative(c) => c.scene_graph,
+            RunConfig::Preference(c) => c.scene_graph,
+        }
     }
+}
 
+impl SessionSpec {
     /// The task's name as the store and the API show it: ours, or `remote` for a remote env's
     /// own task.
     pub fn task_name(&self) -> &'static str {
         self.task.map_or(REMOTE_TASK, Task::id)
     }
 
-    /// The algorithm's configuration with every setting applied. A remote env's own task is
-    /// known only once it is reached: until then (validation) its predicates are none; see
-    /// [`SessionSpec::run_config_on`].
-    pub fn run_config(&self) -> Result<RunConfig, String> {
-        self.run_config_on(None)
-    }
-
-    /// The configuration on a remote env that described itself as `declared` (used when the
-    /// spec has no task of ours).
-    pub fn run_config_on(&self, declared: Option<&RemoteDescription>) -> Result<RunConfig, String> {
+    /// The algorithm's configuration with every setting applied, on a remote env that described
+    /// itself as `declared` (used when the spec has no task of ours). A remote env's own task is
+    /// known only once it is reached: until then (validation) its predicates are none.
+    pub(super) fn run_config_on(
+        &self,
+        declared: Option<&RemoteDescription>,
+    ) -> Result<RunConfig, String> {
         let (task, graph, max_steps) = match (self.task, declared) {
             (Some(task), _) => {
                 return Ok(match self.method {
@@ -189,18 +192,9 @@ impl SessionSpec {
         })
     }
 
-    /// The scene graph the session's queries are phrased in (its `side_engines_on_a0` override
-    /// included); a remote env's own task has the graph it declares, unknown here (empty).
-    pub fn scene_graph(&self) -> Result<crate::scene_graph::SceneGraph, String> {
-        Ok(match self.run_config()? {
-            RunConfig::Evaluative(c) => c.scene_graph,
-            RunConfig::Preference(c) => c.scene_graph,
-        })
-    }
-
-    /// Everything a launch must get right, checked before the session is stored. A remote env
-    /// is not reached here: it may start later than the session is queued.
-    pub fn validate(&self) -> Result<(), String> {
+    /// The budget and where the env is. A remote env is not reached here: it may start later
+    /// than the session is queued.
+    pub(super) fn check_outline(&self) -> Result<(), String> {
         if self.budget == 0 {
             return Err("the budget (steps or queries) must be at least 1".into());
         }
@@ -215,12 +209,20 @@ impl SessionSpec {
             (Some(env), _) => env.validate().map_err(|e| format!("env: {e}"))?,
             (None, Some(_)) => {}
         }
-        if self.env.is_none() && self.params.env_timeout_s.is_some() {
+        if self.env.is_none() && self.params.session.env_timeout_s.is_some() {
             return Err(
                 "env_timeout_s applies to sessions on a remote env (env: {\"url\": ...})".into(),
             );
         }
-        let settings = self.settings()?;
+        Ok(())
+    }
+
+    /// Who answers, against how the answers combine and whether the teacher has faults.
+    pub(super) fn check_people(
+        &self,
+        settings: &SessionSettings,
+        run: &RunConfig,
+    ) -> Result<(), String> {
         let kind = self.method.query_kind();
         if !settings.combine.fits(kind) {
             return Err(format!(
@@ -235,9 +237,9 @@ impl SessionSpec {
                 settings.answers_per_query
             ));
         }
-        let teacher = match self.run_config()? {
-            RunConfig::Evaluative(c) => c.teacher,
-            RunConfig::Preference(c) => c.teacher,
+        let teacher = match run {
+            RunConfig::Evaluative(c) => &c.teacher,
+            RunConfig::Preference(c) => &c.teacher,
         };
         if !teacher.is_perfect() && self.trainer == TrainerKind::Human {
             return Err(
@@ -252,6 +254,7 @@ impl SessionSpec {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::session::plan::SessionPlan;
     use serde_json::json;
 
     fn spec(method: &str, params: serde_json::Value) -> SessionSpec {
@@ -263,6 +266,12 @@ mod tests {
             seed: 1,
             budget: 100,
             params: Settings::from_json(params).unwrap(),
+        }
+    }
+
+    impl SessionSpec {
+        fn plan(&self) -> Result<SessionPlan, crate::session::plan::PlanError> {
+            SessionPlan::new(self.clone())
         }
     }
 
@@ -285,13 +294,17 @@ mod tests {
     #[test]
     fn a_spec_validates_its_settings_for_its_method() {
         assert_eq!(
-            spec("dref", json!({})).settings().unwrap().pace_hz,
+            SessionPlan::new(spec("dref", json!({})))
+                .unwrap()
+                .settings
+                .pace_hz,
             DEFAULT_PACE_HZ
         );
         assert!(
             spec("dref", json!({"pace_hz": -1}))
-                .validate()
+                .plan()
                 .unwrap_err()
+                .0
                 .contains("pace_hz")
         );
         // Recording settings are session settings, not hyper-parameters (the README documents
@@ -301,19 +314,15 @@ mod tests {
                 method,
                 json!({"record": false, "rerun_connect": "rerun+http://127.0.0.1:9876/proxy"}),
             );
-            s.validate().unwrap();
-            assert!(!s.settings().unwrap().record);
+            assert!(!s.plan().unwrap().settings.record);
         }
-        assert!(spec("drpl", json!({"c": 0.3})).validate().is_err());
-        assert!(
-            spec("dref", json!({"trajectories": 10}))
-                .validate()
-                .is_err()
-        );
-        assert!(spec("drpl", json!({"trajectories": 10})).validate().is_ok());
+        assert!(spec("drpl", json!({"c": 0.3})).plan().is_err());
+        assert!(spec("dref", json!({"trajectories": 10})).plan().is_err());
+        assert!(spec("drpl", json!({"trajectories": 10})).plan().is_ok());
         let RunConfig::Evaluative(config) = spec("dref", json!({"variant": "uniform", "c": 0.5}))
-            .run_config()
+            .plan()
             .unwrap()
+            .run
         else {
             panic!("dref is evaluative")
         };
@@ -332,10 +341,10 @@ mod tests {
             "dref",
             json!({"answers_per_query": 2, "combine": "majority"}),
         )
-        .validate()
+        .plan()
         .unwrap();
         spec("drpl", json!({"answers_per_query": 3, "combine": "each"}))
-            .validate()
+            .plan()
             .unwrap();
         for (method, params) in [
             ("dref", json!({"answers_per_query": 2, "combine": "each"})),
@@ -345,27 +354,27 @@ mod tests {
             ("dref", json!({"teacher_error": 0.1})),
         ] {
             assert!(
-                spec(method, params.clone()).validate().is_err(),
+                spec(method, params.clone()).plan().is_err(),
                 "{method} {params}"
             );
         }
         assert!(
             synthetic("dref", json!({"answers_per_query": 2, "combine": "mean"}))
-                .validate()
+                .plan()
                 .is_err()
         );
         synthetic("dref", json!({"teacher_error": 0.1, "teacher_beta": 5}))
-            .validate()
+            .plan()
             .unwrap();
         synthetic("drpl", json!({"teacher_beta": 2, "teacher_gamma": 0.9}))
-            .validate()
+            .plan()
             .unwrap();
         // The offered defaults (a perfect teacher) are fine for people too.
         spec(
             "dref",
             json!({"teacher_beta": "rational", "teacher_error": 0, "teacher_skip": "never"}),
         )
-        .validate()
+        .plan()
         .unwrap();
     }
 

@@ -5,22 +5,14 @@
 //! profile's values. Applies to every evaluative method of the run (DREF's rule to
 //! `dref-authors`, the oracle to EF and DREF alike, the time limit to all).
 
+use serde::{Deserialize, Serialize};
+
 use crate::guidance::evaluative_run::{EvaluativeRunConfig, GraphAtEpisodeEnd, TimeLimitEnd};
 use crate::scene_graph::SceneGraph;
 use crate::sim::{Task, TaskRef};
 
 /// Which constants a run starts from before its own settings.
-#[derive(
-    Clone,
-    Copy,
-    Debug,
-    Default,
-    PartialEq,
-    Eq,
-    serde::Serialize,
-    serde::Deserialize,
-    utoipa::ToSchema,
-)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum Profile {
     /// The authors' repository at its head (algorithms.md).
@@ -31,13 +23,81 @@ pub enum Profile {
 }
 
 /// Placing's scene graph: the head's 36-cell graph or the published runs' 12-cell one.
-#[derive(
-    Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, utoipa::ToSchema,
-)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum SceneGraphChoice {
     Head,
     AsRun,
+}
+
+/// The authors' published runs (issue 33): the profile, and each of its switches on its own.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(default)]
+pub struct AsRunSection {
+    /// `head` (the authors' repository at its head, algorithms.md) or `as-run` (what their
+    /// published runs ran, per task; the settings below, given, override it) [default head].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub profile: Option<Profile>,
+    /// The synthetic oracle's alpha at step 0 (it grows 1e-8 a step) [default 0.999].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub oracle_alpha0: Option<f64>,
+    /// Factor on both actions the oracle's critic and H_hat are shown [default 1].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub oracle_action_scale: Option<f32>,
+    /// Which observation the scene graph reads on an episode's last step: `step` or `reset`
+    /// [default step].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub graph_at_episode_end: Option<GraphAtEpisodeEnd>,
+    /// How a time limit's end is stored: `truncation` or `terminal` [default truncation].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_limit: Option<TimeLimitEnd>,
+}
+
+impl AsRunSection {
+    pub(super) fn offered(c: &EvaluativeRunConfig) -> Self {
+        Self {
+            profile: Some(Profile::Head),
+            oracle_alpha0: Some(c.oracle.alpha0),
+            oracle_action_scale: Some(c.oracle.action_scale),
+            graph_at_episode_end: Some(c.graph_at_episode_end),
+            time_limit: Some(c.time_limit),
+        }
+    }
+
+    /// The profile's values, before any other setting (which override them).
+    pub(super) fn apply_profile(&self, config: &mut EvaluativeRunConfig) -> Result<(), String> {
+        match self.profile {
+            Some(Profile::AsRun) => apply(config),
+            None | Some(Profile::Head) => Ok(()),
+        }
+    }
+
+    /// The switches given, checked, into `config`.
+    pub(super) fn apply_switches(&self, config: &mut EvaluativeRunConfig) -> Result<(), String> {
+        if let Some(a) = self.oracle_alpha0 {
+            if !(a.is_finite() && a > 0.0 && a <= 1.0) {
+                return Err(format!(
+                    "oracle_alpha0: expected a number in (0, 1], got {a}"
+                ));
+            }
+            config.oracle.alpha0 = a;
+        }
+        if let Some(s) = self.oracle_action_scale {
+            if !(s.is_finite() && s > 0.0) {
+                return Err(format!(
+                    "oracle_action_scale: expected a positive number, got {s}"
+                ));
+            }
+            config.oracle.action_scale = s;
+        }
+        if let Some(g) = self.graph_at_episode_end {
+            config.graph_at_episode_end = g;
+        }
+        if let Some(t) = self.time_limit {
+            config.time_limit = t;
+        }
+        Ok(())
+    }
 }
 
 /// The as-run values on `config`'s task:
@@ -51,7 +111,7 @@ pub enum SceneGraphChoice {
 ///   the normalised one); robosuite's time-limit ends stored as terminal;
 /// - Placing (runs of 2022-06-06, f2ff175 / 5dce179): the 12-cell graph without gripper bits
 ///   (`SceneGraph::PlacingAsRun`), c 0.2, k 4 (as the head); time-limit ends terminal.
-pub fn apply(config: &mut EvaluativeRunConfig) -> Result<(), String> {
+fn apply(config: &mut EvaluativeRunConfig) -> Result<(), String> {
     let task = match &config.task {
         TaskRef::Builtin(task) => *task,
         TaskRef::Declared(d) => {

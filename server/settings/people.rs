@@ -1,9 +1,9 @@
 //! The settings about who answers: how many answers a query takes and how they combine, and
-//! the synthetic teacher's faults (`guidance::teacher`). Read by [`Settings`](super::Settings).
+//! the synthetic teacher's faults (`guidance::teacher`), a section of [`Settings`](super::Settings)
+//! that both families take.
 
 use serde::{Deserialize, Serialize};
 
-use super::Settings;
 use crate::guidance::teacher::TeacherFaults;
 use crate::session::combine::Combine;
 
@@ -37,20 +37,47 @@ pub enum NeverWord {
     Never,
 }
 
-/// The teacher settings at their defaults (a perfect teacher), as `GET /api/tasks` offers them.
-pub(super) fn teacher_defaults() -> Settings {
-    Settings {
-        teacher_beta: Some(TeacherBeta::Rational(RationalWord::Rational)),
-        teacher_gamma: Some(1.0),
-        teacher_error: Some(0.0),
-        teacher_skip: Some(TeacherSkip::Never(NeverWord::Never)),
-        teacher_equal: Some(0.0),
-        ..Settings::default()
+/// The synthetic teacher's faults (algorithms.md section 4, after B-Pref).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(default)]
+pub struct TeacherSection {
+    /// Boltzmann rationality: a number, or `rational` (never errs by chance) [default].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub teacher_beta: Option<TeacherBeta>,
+    /// Myopic discount in (0, 1] [default 1: not myopic].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub teacher_gamma: Option<f64>,
+    /// Probability that an answer is flipped [default 0].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub teacher_error: Option<f64>,
+    /// Skip what is worth less than this: a number, or `never` [default].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub teacher_skip: Option<TeacherSkip>,
+    /// Answer "about equal" (evaluative: 0) below this margin [default 0].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub teacher_equal: Option<f64>,
+}
+
+impl TeacherSection {
+    /// The teacher settings at their defaults (a perfect teacher), as `GET /api/tasks` offers
+    /// them.
+    pub(super) fn offered() -> Self {
+        Self {
+            teacher_beta: Some(TeacherBeta::Rational(RationalWord::Rational)),
+            teacher_gamma: Some(1.0),
+            teacher_error: Some(0.0),
+            teacher_skip: Some(TeacherSkip::Never(NeverWord::Never)),
+            teacher_equal: Some(0.0),
+        }
+    }
+
+    /// The teacher's faults, checked.
+    pub(super) fn faults(&self) -> Result<TeacherFaults, String> {
+        teacher_faults(self)
     }
 }
 
-/// The teacher's faults from the settings, checked.
-pub(super) fn teacher_faults(s: &Settings) -> Result<TeacherFaults, String> {
+fn teacher_faults(s: &TeacherSection) -> Result<TeacherFaults, String> {
     let faults = TeacherFaults {
         beta: match s.teacher_beta {
             None | Some(TeacherBeta::Rational(_)) => None,

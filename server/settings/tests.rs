@@ -1,6 +1,13 @@
 use serde_json::json;
 
 use super::*;
+use crate::guidance::drpl::acquisition::Acquisition;
+use crate::guidance::evaluative_run::{GraphAtEpisodeEnd, TimeLimitEnd};
+use crate::guidance::query_rule::UcbForm;
+use crate::rl::ActorMix;
+use crate::rl::kernels::KernelPath;
+use crate::scene_graph::SceneGraph;
+use crate::sim::{GripObservation, PlacingSuccess, Variant};
 
 fn dref(task: Task, settings: &Settings) -> Result<EvaluativeRunConfig, String> {
     settings.evaluative(task, EvaluativeMethod::Dref, 0)
@@ -17,18 +24,21 @@ fn pairs_read_json_where_it_is_json_and_text_elsewhere() {
         ("k", "7"),
     ])
     .unwrap();
-    assert_eq!(s.hidden, Some(vec![256, 256]));
-    assert_eq!(s.c, Some(0.3));
-    assert_eq!(s.ucb, Some(UcbForm::Paper));
-    assert_eq!(s.human_critic_mask, Some(true));
-    assert_eq!(s.target_entropy, Some(TargetEntropy::Auto(AutoWord::Auto)));
-    assert_eq!(s.k, Some(7));
+    assert_eq!(s.sac.hidden, Some(vec![256, 256]));
+    assert_eq!(s.query_rule.c, Some(0.3));
+    assert_eq!(s.query_rule.ucb, Some(UcbForm::Paper));
+    assert_eq!(s.human_critic.human_critic_mask, Some(true));
+    assert_eq!(
+        s.sac.target_entropy,
+        Some(TargetEntropy::Auto(AutoWord::Auto))
+    );
+    assert_eq!(s.query_rule.k, Some(7));
     let s = Settings::from_pairs([("target_entropy", "-2"), ("hidden", "[32, 32]")]).unwrap();
-    assert_eq!(s.target_entropy, Some(TargetEntropy::Value(-2.0)));
-    assert_eq!(s.hidden, Some(vec![32, 32]));
+    assert_eq!(s.sac.target_entropy, Some(TargetEntropy::Value(-2.0)));
+    assert_eq!(s.sac.hidden, Some(vec![32, 32]));
     // A later pair wins.
     let s = Settings::from_pairs([("c", "0.1"), ("c", "0.2")]).unwrap();
-    assert_eq!(s.c, Some(0.2));
+    assert_eq!(s.query_rule.c, Some(0.2));
 }
 
 #[test]
@@ -212,10 +222,10 @@ fn the_offered_defaults_are_the_runs_defaults_and_apply_cleanly() {
             "{task}"
         );
         // The task versions are Reaching's and Placing's only.
-        assert_eq!(offered.variant.is_some(), task != Task::LunarLander);
-        assert_eq!(offered.release_at.is_some(), task == Task::Placing);
+        assert_eq!(offered.env.variant.is_some(), task != Task::LunarLander);
+        assert_eq!(offered.env.release_at.is_some(), task == Task::Placing);
         assert_eq!(
-            offered.side_engines_on_a0.is_some(),
+            offered.scene_graph.side_engines_on_a0.is_some(),
             task == Task::LunarLander
         );
     }
@@ -226,7 +236,7 @@ fn merged_settings_take_the_later_value() {
     let file = Settings::from_json(json!({"c": 0.1, "k": 3})).unwrap();
     let flags = Settings::from_pairs([("c", "0.2")]).unwrap();
     let s = file.merged(flags).unwrap();
-    assert_eq!((s.c, s.k), (Some(0.2), Some(3)));
+    assert_eq!((s.query_rule.c, s.query_rule.k), (Some(0.2), Some(3)));
 }
 
 #[test]

@@ -3,6 +3,7 @@
 //! session's broadcasts and take answers. Each message is parsed once (`protocol`); bad input
 //! gets an `error` and the connection stays up.
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use axum::extract::State;
@@ -16,9 +17,10 @@ use crate::http::auth::SessionAccess;
 use crate::http::error::ApiError;
 use crate::hub::{AnswerReply, Identity, Joined, SessionHandle};
 use crate::protocol::{
-    ClientMessage, ErrorCode, ProtocolError, QueryId, QueryKind, ServerMessage, id_of, parse_client,
+    ClientMessage, ErrorCode, ProtocolError, QueryId, ServerMessage, id_of, parse_client,
 };
 use crate::scene_graph::SceneGraph;
+use crate::session::SessionPlan;
 use crate::store::SessionRow;
 
 use super::rate_limit::{MESSAGES_PER_SECOND, RateLimit, whole_ms};
@@ -52,9 +54,21 @@ pub async fn upgrade(
             return ApiError::BadRequest(format!("not a websocket request: {e}")).into_response();
         }
     };
+    // The plan the running session was started with; an ended one's, read from its row (a
+    // stored session that no longer reads gets no socket, rather than a made-up `hello`).
+    let plan = match state.hub.session(&row.id) {
+        Some(live) => live.plan.clone(),
+        None => match row
+            .spec()
+            .and_then(|spec| SessionPlan::new(spec).map_err(|e| e.0))
+        {
+            Ok(plan) => Arc::new(plan),
+            Err(reason) => return ApiError::Conflict(reason).into_response(),
+        },
+    };
     ws.max_message_size(MAX_MESSAGE_BYTES)
         .max_frame_size(MAX_MESSAGE_BYTES)
-        .on_upgrade(move |socket| serve(state, row, who, socket))
+        .on_upgrade(move |socket| serve(state, row, plan, who, socket))
 }
 
 fn text(s: &str) -> Message {
@@ -63,42 +77,37 @@ fn text(s: &str) -> Message {
 
 fn hello(
     row: &SessionRow,
+    plan: &SessionPlan,
     who: &Identity,
     geometry: Option<crate::sim::Geometry>,
     live_graph: Option<SceneGraph>,
     status: crate::store::Status,
 ) -> ServerMessage {
-    let spec = row.spec().ok();
-    let task = spec.as_ref().map_or("reaching", |s| s.task_name());
-    // The running session's graph (a remote env's own task declares it), else the spec's.
-    let graph = live_graph
-        .or_else(|| spec.as_ref().and_then(|s| s.scene_graph().ok()))
-        .unwrap_or(SceneGraph::Declared(&[]));
-    let settings = spec.as_ref().and_then(|s| s.settings().ok());
-    let pace_hz = settings
-        .as_ref()
-        .map_or(crate::session::spec::DEFAULT_PACE_HZ, |s| s.pace_hz);
-    let (answers_per_query, combine) = settings.as_ref().map_or((1, Default::default()), |s| {
-        (s.answers_per_query, s.combine)
-    });
-    let kind = spec.map_or(QueryKind::Evaluative, |s| s.method.query_kind());
+    // The running session's graph (a remote env's own task declares it), else the plan's.
+    let graph = live_graph.unwrap_or(plan.graph);
     ServerMessage::Hello {
         session: row.id.clone(),
-        task,
+        task: plan.spec.task_name(),
         method: row.method.clone(),
-        kind,
+        kind: plan.kind,
         status,
         predicates: graph.predicates().to_vec(),
         geometry,
         budget: row.budget as u64,
-        pace_hz,
+        pace_hz: plan.settings.pace_hz,
         trainer: who.trainer().cloned(),
-        answers_per_query,
-        combine,
+        answers_per_query: plan.settings.answers_per_query,
+        combine: plan.settings.combine,
     }
 }
 
-async fn serve(state: AppState, row: SessionRow, who: Identity, mut socket: WebSocket) {
+async fn serve(
+    state: AppState,
+    row: SessionRow,
+    plan: Arc<SessionPlan>,
+    who: Identity,
+    mut socket: WebSocket,
+) {
     let session = state.hub.session(&row.id);
     let snapshot = session.as_ref().map(SessionHandle::snapshot);
     let status = snapshot.as_ref().map_or(row.status, |s| s.status);
@@ -106,7 +115,7 @@ async fn serve(state: AppState, row: SessionRow, who: Identity, mut socket: WebS
     let geometry = snapshot.and_then(|s| s.geometry);
     if socket
         .send(text(
-            &hello(&row, &who, geometry, live_graph, status).to_text(),
+            &hello(&row, &plan, &who, geometry, live_graph, status).to_text(),
         ))
         .await
         .is_err()

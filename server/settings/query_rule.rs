@@ -1,0 +1,136 @@
+//! DREF's query rule (algorithms.md section 2, docs/dref.md): its constants, the product's
+//! window and ceiling, and the silence wake.
+
+use serde::{Deserialize, Serialize};
+
+use crate::guidance::evaluative_run::{DEFAULT_CEILING, FeedbackCeiling, QueryRuleConfig};
+use crate::guidance::query_rule::UcbForm;
+
+/// DREF's query rule.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(default)]
+pub struct QueryRuleSection {
+    /// The query rule's exploration constant c.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub c: Option<f64>,
+    /// The query rule asks iff at most k ranked states score higher.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub k: Option<usize>,
+    /// The UCB form: `authors` or `paper`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ucb: Option<UcbForm>,
+    /// Rank the current state among those visited in the last N steps; 0: among every state
+    /// with feedback, the authors' [default 1000 for `dref`, 0 for `dref-authors`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rank_window: Option<usize>,
+    /// Ask on at most this share of steps, in (0, 1]; 0: no ceiling, the authors' [default 0.1
+    /// for `dref`, 0 for `dref-authors`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_feedback_rate: Option<f64>,
+    /// With a ceiling: at most about this many queries in a row [default 20].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub feedback_burst: Option<u32>,
+    /// With a ceiling: let the rate run from this floor (recent answers all "good") up to
+    /// `max_feedback_rate` (all "bad"); 0: a fixed rate [default 0].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min_feedback_rate: Option<f64>,
+    /// After this many steps without a query, rank the current state among the states visited
+    /// during that silence instead of among every state with feedback, until the rule asks
+    /// again; 0: never, the authors' [default 0].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wake_after: Option<u64>,
+}
+
+impl QueryRuleSection {
+    /// The rule's settings at `rule`'s values (0 where it has no ceiling).
+    pub(super) fn offered(rule: &QueryRuleConfig) -> Self {
+        Self {
+            c: Some(rule.c),
+            k: Some(rule.k),
+            ucb: Some(rule.form),
+            rank_window: Some(rule.rank_window),
+            max_feedback_rate: Some(rule.ceiling.map_or(0.0, |x| x.rate)),
+            feedback_burst: Some(rule.ceiling.map_or(DEFAULT_CEILING.burst, |x| x.burst)),
+            min_feedback_rate: Some(rule.ceiling.and_then(|x| x.floor).unwrap_or(0.0)),
+            wake_after: Some(rule.wake_after),
+        }
+    }
+
+    /// Every setting given, checked, into `rule`.
+    pub(super) fn apply(&self, rule: &mut QueryRuleConfig) -> Result<(), String> {
+        if let Some(c) = self.c {
+            if !c.is_finite() || c < 0.0 {
+                return Err(format!("c: expected a number >= 0, got {c}"));
+            }
+            rule.c = c;
+        }
+        if let Some(k) = self.k {
+            rule.k = k;
+        }
+        if let Some(form) = self.ucb {
+            rule.form = form;
+        }
+        self.apply_pacing(rule)?;
+        if let Some(steps) = self.wake_after {
+            rule.wake_after = steps;
+        }
+        Ok(())
+    }
+
+    /// The product rule's window and ceiling (docs/dref.md), on any DREF: 0 switches either off.
+    fn apply_pacing(&self, rule: &mut QueryRuleConfig) -> Result<(), String> {
+        if let Some(w) = self.rank_window {
+            rule.rank_window = w;
+        }
+        match self.max_feedback_rate {
+            None => {}
+            Some(0.0) => rule.ceiling = None,
+            Some(r) if r.is_finite() && r > 0.0 && r <= 1.0 => {
+                let (burst, floor) = rule
+                    .ceiling
+                    .map_or((DEFAULT_CEILING.burst, None), |c| (c.burst, c.floor));
+                rule.ceiling = Some(FeedbackCeiling {
+                    rate: r,
+                    burst,
+                    floor,
+                });
+            }
+            Some(r) => {
+                return Err(format!(
+                    "max_feedback_rate: expected a share of steps in (0, 1], or 0 for no ceiling, got {r}"
+                ));
+            }
+        }
+        match (self.min_feedback_rate, &mut rule.ceiling) {
+            (None, _) => {}
+            (Some(0.0), Some(c)) => c.floor = None,
+            (Some(0.0), None) => {}
+            (Some(f), Some(c)) if f.is_finite() && f > 0.0 && f <= c.rate => c.floor = Some(f),
+            (Some(f), Some(c)) => {
+                return Err(format!(
+                    "min_feedback_rate: expected a share of steps in (0, max_feedback_rate = {}], or 0 for a fixed rate, got {f}",
+                    c.rate
+                ));
+            }
+            (Some(_), None) => {
+                return Err(
+                    "min_feedback_rate: the rule has no ceiling; set max_feedback_rate too".into(),
+                );
+            }
+        }
+        if let Some(b) = self.feedback_burst {
+            if b == 0 {
+                return Err("feedback_burst: expected at least 1".into());
+            }
+            match &mut rule.ceiling {
+                Some(c) => c.burst = b,
+                None => {
+                    return Err(
+                        "feedback_burst: the rule has no ceiling; set max_feedback_rate too".into(),
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,219 @@
+//! SAC's settings (algorithms.md section 1) and DREF's human critic, the learner's two
+//! sections: what they offer and what they set in a run's [`SacConfig`].
+
+use serde::{Deserialize, Deserializer, Serialize};
+
+use crate::rl::{ActorMix, HumanCriticConfig, SacConfig};
+
+/// SAC's target entropy: SB3's `-dim(A)` ("auto") or a number.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(untagged)]
+pub enum TargetEntropy {
+    Auto(AutoWord),
+    Value(f32),
+}
+
+/// The word `auto`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum AutoWord {
+    Auto,
+}
+
+/// SAC's learner.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(default)]
+pub struct SacSection {
+    /// Hidden layer sizes of the actor and every critic, e.g. `[256, 256]` or `"256,256"`.
+    #[serde(
+        deserialize_with = "layer_sizes",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub hidden: Option<Vec<usize>>,
+    /// Adam's learning rate (actor, critics, temperature).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub learning_rate: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub batch_size: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub buffer_size: Option<usize>,
+    /// Polyak coefficient, in [0, 1].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tau: Option<f32>,
+    /// Discount, in [0, 1].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gamma: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub learning_starts: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gradient_steps: Option<usize>,
+    /// Initial entropy temperature.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub init_ent_coef: Option<f32>,
+    /// `"auto"` (-dim(A)) or a number.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target_entropy: Option<TargetEntropy>,
+}
+
+/// DREF's human critic.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(default)]
+pub struct HumanCriticSection {
+    /// DREF's human critic on or off (on for DREF and EF, off for SAC).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub human_critic: Option<bool>,
+    /// Weight of the human critic against Q in the actor loss (the authors: 9).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lambda: Option<f32>,
+    /// How the actor mixes Q and H: `authors` (head-wise) or `paper` (Eq. 5).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mix: Option<ActorMix>,
+    /// Regress the human critic only on transitions that had feedback.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub human_critic_mask: Option<bool>,
+}
+
+/// `hidden` as a list of layer sizes, the CLI's comma-separated text, or one number.
+fn layer_sizes<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Vec<usize>>, D::Error> {
+    use serde_json::Value;
+    let value = Value::deserialize(d)?;
+    let size = |v: &Value| v.as_u64().map(|n| n as usize);
+    let sizes = match &value {
+        Value::Array(items) => items.iter().map(size).collect::<Option<Vec<_>>>(),
+        Value::String(text) => text
+            .split(',')
+            .map(|s| s.trim().parse::<usize>().ok())
+            .collect(),
+        Value::Number(_) => size(&value).map(|n| vec![n]),
+        _ => None,
+    };
+    sizes.map(Some).ok_or_else(|| {
+        serde::de::Error::custom(format!(
+            "hidden: expected layer sizes such as [256, 256] or \"256,256\", got {value}"
+        ))
+    })
+}
+
+impl SacSection {
+    /// The learner's settings at `sac`'s values (the task's defaults).
+    pub(super) fn offered(sac: &SacConfig) -> Self {
+        Self {
+            hidden: Some(sac.hidden.clone()),
+            learning_rate: Some(sac.learning_rate),
+            batch_size: Some(sac.batch_size),
+            buffer_size: Some(sac.buffer_size),
+            tau: Some(sac.tau),
+            gamma: Some(sac.gamma),
+            learning_starts: Some(sac.learning_starts),
+            gradient_steps: Some(sac.gradient_steps),
+            init_ent_coef: Some(sac.init_ent_coef),
+            target_entropy: Some(
+                sac.target_entropy
+                    .map_or(TargetEntropy::Auto(AutoWord::Auto), TargetEntropy::Value),
+            ),
+        }
+    }
+
+    /// Every setting given, checked, into `sac`.
+    pub(super) fn apply(&self, sac: &mut SacConfig) -> Result<(), String> {
+        if let Some(h) = &self.hidden {
+            if h.is_empty() || h.contains(&0) {
+                return Err(format!("hidden: expected positive layer sizes, got {h:?}"));
+            }
+            sac.hidden = h.clone();
+        }
+        set_positive(&mut sac.learning_rate, self.learning_rate, "learning_rate")?;
+        set_count(&mut sac.batch_size, self.batch_size, "batch_size")?;
+        set_count(&mut sac.buffer_size, self.buffer_size, "buffer_size")?;
+        set_unit(&mut sac.tau, self.tau, "tau")?;
+        set_unit(&mut sac.gamma, self.gamma, "gamma")?;
+        if let Some(n) = self.learning_starts {
+            sac.learning_starts = n;
+        }
+        if let Some(n) = self.gradient_steps {
+            sac.gradient_steps = n;
+        }
+        set_positive(&mut sac.init_ent_coef, self.init_ent_coef, "init_ent_coef")?;
+        match self.target_entropy {
+            None => {}
+            Some(TargetEntropy::Auto(_)) => sac.target_entropy = None,
+            Some(TargetEntropy::Value(v)) if v.is_finite() => sac.target_entropy = Some(v),
+            Some(TargetEntropy::Value(v)) => {
+                return Err(format!("target_entropy: expected a finite number, got {v}"));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl HumanCriticSection {
+    /// The critic's settings, on, at `sac`'s critic's values (its defaults if it has none).
+    pub(super) fn offered(sac: &SacConfig) -> Self {
+        let critic = sac.human_critic.clone().unwrap_or_default();
+        Self {
+            human_critic: Some(true),
+            lambda: Some(critic.lambda),
+            mix: Some(critic.mix),
+            human_critic_mask: Some(critic.mask),
+        }
+    }
+
+    /// Switches the critic on or off; any of its own settings switches it on (with defaults
+    /// for the rest).
+    pub(super) fn apply(&self, sac: &mut SacConfig) -> Result<(), String> {
+        if let Some(on) = self.human_critic {
+            sac.human_critic = on.then(|| sac.human_critic.clone().unwrap_or_default());
+        }
+        if let Some(l) = self.lambda {
+            if !(l.is_finite() && l >= 0.0) {
+                return Err(format!("lambda: expected a number >= 0, got {l}"));
+            }
+            critic(sac).lambda = l;
+        }
+        if let Some(m) = self.mix {
+            critic(sac).mix = m;
+        }
+        if let Some(m) = self.human_critic_mask {
+            critic(sac).mask = m;
+        }
+        Ok(())
+    }
+}
+
+/// The human critic's config, switched on (with defaults) if it was off.
+fn critic(sac: &mut SacConfig) -> &mut HumanCriticConfig {
+    sac.human_critic.get_or_insert_default()
+}
+
+pub(super) fn set_positive(slot: &mut f32, value: Option<f32>, key: &str) -> Result<(), String> {
+    match value {
+        None => Ok(()),
+        Some(v) if v.is_finite() && v > 0.0 => {
+            *slot = v;
+            Ok(())
+        }
+        Some(v) => Err(format!("{key}: expected a positive number, got {v}")),
+    }
+}
+
+fn set_unit(slot: &mut f32, value: Option<f32>, key: &str) -> Result<(), String> {
+    match value {
+        None => Ok(()),
+        Some(v) if (0.0..=1.0).contains(&v) => {
+            *slot = v;
+            Ok(())
+        }
+        Some(v) => Err(format!("{key}: expected a number in [0, 1], got {v}")),
+    }
+}
+
+fn set_count(slot: &mut usize, value: Option<usize>, key: &str) -> Result<(), String> {
+    match value {
+        None => Ok(()),
+        Some(0) => Err(format!("{key}: expected at least 1")),
+        Some(n) => {
+            *slot = n;
+            Ok(())
+        }
+    }
+}
