@@ -10,6 +10,12 @@
 
 use serde::{Deserialize, Serialize};
 
+/// A person's pace when a DREF session with a human trainer does not set one: one query about
+/// every 2 s. The rule's own ceiling is a share of steps (10 %), which at 20 Hz is 120 queries
+/// a minute, more than a person answers with thought; the scripted person ended Reaching
+/// solved at 30 a minute (`docs/results/scripted-person/`).
+pub const PEOPLE_QUERIES_PER_MINUTE: u32 = 30;
+
 /// At most `max_per_minute` queries in any `steps_per_minute` consecutive steps.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct HumanPace {

@@ -11,6 +11,7 @@ use crate::guidance::drpl::run::PreferenceRunConfig;
 use crate::guidance::drpl::selection::QueryMethod;
 use crate::guidance::evaluative_run::EvaluativeRunConfig;
 use crate::guidance::feedback_schedule::EvaluativeMethod;
+use crate::guidance::human_pace::{HumanPace, PEOPLE_QUERIES_PER_MINUTE};
 use crate::remote_env::{RemoteDescription, RemoteTarget};
 use crate::scene_graph::SceneGraph;
 use crate::settings::Settings;
@@ -163,9 +164,9 @@ impl SessionSpec {
         let (task, graph, max_steps) = match (self.task, declared) {
             (Some(task), _) => {
                 return Ok(match self.method {
-                    SessionMethod::Evaluative(method) => {
-                        RunConfig::Evaluative(self.params.evaluative(task, method, self.seed)?)
-                    }
+                    SessionMethod::Evaluative(method) => RunConfig::Evaluative(
+                        self.paced_for_people(self.params.evaluative(task, method, self.seed)?)?,
+                    ),
                     SessionMethod::Preference(method) => {
                         RunConfig::Preference(self.params.preference(task, method, self.seed)?)
                     }
@@ -180,9 +181,9 @@ impl SessionSpec {
         };
         Ok(match self.method {
             SessionMethod::Evaluative(method) => {
-                RunConfig::Evaluative(self.params.apply_evaluative(
+                RunConfig::Evaluative(self.paced_for_people(self.params.apply_evaluative(
                     EvaluativeRunConfig::declared(task, graph, method, self.seed),
-                )?)
+                )?)?)
             }
             SessionMethod::Preference(method) => {
                 RunConfig::Preference(self.params.apply_preference(
@@ -190,6 +191,22 @@ impl SessionSpec {
                 )?)
             }
         })
+    }
+
+    /// A DREF session answered by a person asks at a person's pace unless the launch set one
+    /// (`max_queries_per_minute`, 0 for none): the rule's ceiling is a share of steps, and a
+    /// person answers fewer a minute than a fast robot takes steps. Synthetic trainers and EF
+    /// (whose schedule is its definition) keep the rule's own pace.
+    fn paced_for_people(
+        &self,
+        mut config: EvaluativeRunConfig,
+    ) -> Result<EvaluativeRunConfig, String> {
+        let unset = self.params.evaluative.max_queries_per_minute.is_none();
+        if self.trainer == TrainerKind::Human && config.method == EvaluativeMethod::Dref && unset {
+            let pace_hz = self.params.session()?.pace_hz;
+            config.human_pace = Some(HumanPace::new(PEOPLE_QUERIES_PER_MINUTE, pace_hz));
+        }
+        Ok(config)
     }
 
     /// The budget and where the env is. A remote env is not reached here: it may start later
@@ -273,6 +290,45 @@ mod tests {
         fn plan(&self) -> Result<SessionPlan, crate::session::plan::PlanError> {
             SessionPlan::new(self.clone())
         }
+    }
+
+    #[test]
+    fn a_persons_dref_session_asks_at_a_persons_pace_unless_told_otherwise() {
+        let pace = |method: &str, trainer: TrainerKind, params: serde_json::Value| {
+            let mut s = spec(method, params);
+            s.trainer = trainer;
+            match s.run_config_on(None).unwrap() {
+                RunConfig::Evaluative(c) => c.human_pace,
+                RunConfig::Preference(_) => unreachable!(),
+            }
+        };
+        let person = Some(HumanPace::new(PEOPLE_QUERIES_PER_MINUTE, 20.0));
+        assert_eq!(pace("dref", TrainerKind::Human, json!({})), person);
+        assert_eq!(
+            pace("dref", TrainerKind::Human, json!({"pace_hz": 10})),
+            Some(HumanPace::new(30, 10.0))
+        );
+        assert_eq!(
+            pace(
+                "dref",
+                TrainerKind::Human,
+                json!({"max_queries_per_minute": 12})
+            ),
+            Some(HumanPace::new(12, 20.0))
+        );
+        // Told otherwise: no pace at all, as the paper ran.
+        assert_eq!(
+            pace(
+                "dref",
+                TrainerKind::Human,
+                json!({"max_queries_per_minute": 0})
+            ),
+            None
+        );
+        // The synthetic trainer, the authors' rule and EF keep their own pace.
+        assert_eq!(pace("dref", TrainerKind::Synthetic, json!({})), None);
+        assert_eq!(pace("dref-authors", TrainerKind::Human, json!({})), None);
+        assert_eq!(pace("ef-100", TrainerKind::Human, json!({})), None);
     }
 
     #[test]
