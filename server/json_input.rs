@@ -90,7 +90,13 @@ fn byte_offset(text: &str, line: usize, column: usize) -> usize {
         .take(line.saturating_sub(1))
         .map(str::len)
         .sum();
-    (line_start + column.saturating_sub(1)).min(text.len())
+    // serde_json counts columns in bytes, and an error can point into a character of more
+    // than one byte; slicing there would panic, so step back to the character's start.
+    let mut offset = (line_start + column.saturating_sub(1)).min(text.len());
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    offset
 }
 
 /// The path of the value that `text[offset..]` is in, as `a.b[2].c` ("" at the top), read
@@ -213,5 +219,19 @@ mod tests {
         ));
         let e = from_str::<Launch>(r#"{"task": "x", "params": {"c": "#).unwrap_err();
         assert!(e.to_string().starts_with("field \"params.c\""), "{e}");
+    }
+
+    #[test]
+    fn an_error_inside_a_character_of_several_bytes_is_refused_not_a_panic() {
+        // Found by protocol's property test: serde_json's byte column points into `¡`.
+        for text in [
+            "\"\u{a1}",
+            "{\"task\": \"\u{a1}",
+            "\u{a1}",
+            "[\"\u{1F916}\"",
+            "{\"\u{e9}\u{e9}\": 1,",
+        ] {
+            assert!(from_str::<Launch>(text).is_err(), "{text:?}");
+        }
     }
 }
