@@ -6,11 +6,10 @@ use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde::{Deserialize, Serialize};
 
-use super::AppState;
-use super::auth::SessionAccess;
-use super::error::{ApiError, ApiResult};
 use super::json_body::JsonBody;
-use super::openapi::ErrorBody;
+use crate::api::AppState;
+use crate::api::auth::SessionAccess;
+use crate::api::error::{ApiError, ApiResult, ErrorBody};
 use crate::remote_env::RemoteTarget;
 use crate::session::spec::DEFAULT_QUERIES;
 use crate::session::{SessionMethod, SessionSpec, TrainerKind};
