@@ -40,8 +40,9 @@
 //!   owner task each that alone holds the session's live state (events, answers, undo,
 //!   deadlines and status in one `select!`; commit, then acknowledge); stop, resume and
 //!   graceful shutdown.
-//! - [`http`]: REST routes, auth, errors, security headers, the web UI's files; [`ws`]: the
-//!   trainer websocket and its typed protocol; [`json_input`]: clients' JSON read with errors
+//! - [`http`]: REST routes, security headers, the web UI's files; [`ws`]: the trainer
+//!   websocket and its typed protocol; [`api`]: what both share (the app state, who may call,
+//!   every refusal and its JSON shape); [`json_input`]: clients' JSON read with errors
 //!   that name the field that was wrong.
 //! - [`shipped`]: the web UI and the shipped experts, carried inside the binary.
 //! - [`remote_env`]: environments in another process or on another machine
@@ -58,6 +59,7 @@
 //! - [`cli`]: the `dualrep` command line: `serve`, `sim`, `train`, `prefs`, `expert`,
 //!   `reproduce`, `export`, `bench`, `loadtest`.
 
+pub mod api;
 pub mod cli;
 pub mod export;
 pub mod guidance;

@@ -8,9 +8,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::json_input;
 use crate::scene_graph::Predicate;
-pub use crate::session::combine::Combine;
 pub use crate::session::{AnswerValue, Answerer, QueryKind};
 use crate::session::{Frame, QueryContent};
+pub use crate::settings::Combine;
 use crate::sim::Geometry;
 use crate::store::{Status, TrainerRef};
 

@@ -14,7 +14,8 @@ use anyhow::Context;
 use axum::http::HeaderValue;
 use tokio::net::TcpListener;
 
-use crate::http::{AppState, app};
+use crate::api::AppState;
+use crate::http::app;
 use crate::hub::{Hub, HubConfig};
 use crate::store::Store;
 

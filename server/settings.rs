@@ -30,6 +30,7 @@ use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::sim::Task;
 
 mod as_run;
+mod combine;
 mod evaluative;
 mod keys;
 mod people;
@@ -40,8 +41,8 @@ mod sac;
 mod session;
 mod task_version;
 
-pub use crate::session::combine::Combine;
 pub use as_run::{AsRunSection, Profile, SceneGraphChoice};
+pub use combine::Combine;
 pub use evaluative::EvaluativeSection;
 pub use people::{NeverWord, RationalWord, TeacherBeta, TeacherSection, TeacherSkip};
 pub use preference::PreferenceSection;
@@ -282,7 +283,5 @@ impl utoipa::ToSchema for Settings {
 
 #[cfg(test)]
 mod pinned;
-#[cfg(test)]
-mod reach;
 #[cfg(test)]
 mod tests;

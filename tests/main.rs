@@ -20,6 +20,7 @@ mod durability;
 mod env_contract;
 mod http_api;
 mod lunar_lander;
+mod module_graph;
 mod prefs_e2e;
 mod recording;
 mod remote_env_failures;

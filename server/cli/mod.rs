@@ -16,6 +16,8 @@ mod progress;
 mod remote;
 mod reproduce;
 pub mod serve;
+#[cfg(test)]
+mod settings_reach;
 mod sim;
 mod train;
 

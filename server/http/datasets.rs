@@ -6,10 +6,9 @@ use axum::extract::{Path, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
 
-use super::AppState;
-use super::error::{ApiError, ApiResult};
-use super::openapi::ErrorBody;
 use super::trainers::session_row;
+use crate::api::AppState;
+use crate::api::error::{ApiError, ApiResult, ErrorBody};
 use crate::export::session::{Dataset, ExportError, export, file_name};
 
 async fn serve(state: &AppState, id: &str, what: Dataset) -> ApiResult<Response> {

@@ -7,7 +7,7 @@ use axum::extract::{FromRequest, Request};
 use axum::http::{StatusCode, header};
 use serde::de::DeserializeOwned;
 
-use super::error::ApiError;
+use crate::api::error::ApiError;
 use crate::json_input;
 
 /// The request body as a `T`, from `Content-Type: application/json`.

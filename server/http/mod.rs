@@ -7,13 +7,11 @@
 //!   `trainer_views` builds those views.
 //! - `datasets`: a session's Parquet table, posterior and policy files.
 //! - `tasks`, `openapi`: self-description.
-//! - `auth`, `error`, `json_body`: the bearer check, the JSON error shape, and request bodies
-//!   whose errors name the field that was wrong.
+//! - `json_body`: request bodies whose errors name the field that was wrong (who may call, the
+//!   JSON error shape and the state handlers reach are in [`crate::api`], shared with `ws`).
 //! - `security_headers`: the CSP, referrer and MIME-sniffing headers on every response.
 
-pub mod auth;
 pub mod datasets;
-pub mod error;
 pub mod json_body;
 pub mod openapi;
 pub mod security_headers;
@@ -22,11 +20,10 @@ pub mod tasks;
 pub mod trainer_views;
 pub mod trainers;
 
-use std::path::PathBuf;
 use std::sync::Arc;
 
 use axum::extract::{Path, State};
-use axum::http::{HeaderValue, Method, StatusCode, header};
+use axum::http::{Method, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{any, get};
 use axum::{Extension, Json, Router, middleware};
@@ -38,26 +35,12 @@ use utoipa::OpenApi;
 use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
 
-use crate::hub::Hub;
-use crate::store::Store;
-use error::{ApiError, ApiResult};
+use crate::api::AppState;
+use crate::api::auth;
+use crate::api::error::{ApiError, ApiResult, ErrorBody};
 
 /// Largest request body the API takes (launch requests are a few hundred bytes).
 pub const MAX_BODY_BYTES: usize = 64 * 1024;
-
-/// What every handler can reach.
-#[derive(Clone)]
-pub struct AppState {
-    pub store: Store,
-    pub hub: Arc<Hub>,
-    /// The researcher token.
-    pub token: Arc<str>,
-    /// Serve the web UI from this folder; `None` serves the copy inside the binary.
-    pub web_dir: Option<PathBuf>,
-    pub data_dir: PathBuf,
-    /// Origins allowed to call the API from other sites (none by default).
-    pub cors_origins: Vec<HeaderValue>,
-}
 
 /// Every documented route, before the state is supplied: the researcher routes (behind the
 /// bearer token in [`app`]) and the public ones. The OpenAPI document is generated from these.
@@ -162,7 +145,7 @@ async fn api_not_found() -> ApiError {
     security(()),
     responses(
         (status = 200, description = "Healthy: `{\"status\": \"ok\"}`", body = Object),
-        (status = 503, description = "The database does not answer", body = openapi::ErrorBody)
+        (status = 503, description = "The database does not answer", body = ErrorBody)
     )
 )]
 async fn healthz(State(state): State<AppState>) -> Response {
@@ -180,7 +163,7 @@ async fn healthz(State(state): State<AppState>) -> Response {
     params(("id" = String, Path, description = "The session")),
     responses(
         (status = 200, description = "The session's Rerun recording (open with `rerun <file>`)", content_type = "application/octet-stream", body = Vec<u8>),
-        (status = "default", description = "An error", body = openapi::ErrorBody)
+        (status = "default", description = "An error", body = ErrorBody)
     )
 )]
 async fn recording(State(state): State<AppState>, Path(id): Path<String>) -> ApiResult<Response> {

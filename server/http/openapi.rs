@@ -6,7 +6,9 @@ use std::sync::Arc;
 
 use axum::{Extension, Json};
 use utoipa::openapi::security::{Http, HttpAuthScheme, SecurityScheme};
-use utoipa::{Modify, OpenApi, ToSchema};
+use utoipa::{Modify, OpenApi};
+
+use crate::api::error::{ErrorBody, ErrorDetail};
 
 /// The document's frame: title, version, the bearer scheme, and the schemas every route
 /// shares. Paths are added by the router.
@@ -40,23 +42,6 @@ impl Modify for BearerScheme {
             .get_or_insert_with(Default::default)
             .add_security_scheme("bearer", SecurityScheme::Http(scheme));
     }
-}
-
-/// Every refusal: `{"error": {"code": "...", "message": "..."}}`.
-#[derive(ToSchema)]
-#[allow(dead_code)] // documentation only: `ApiError` writes this shape
-pub struct ErrorBody {
-    error: ErrorDetail,
-}
-
-#[derive(ToSchema)]
-#[allow(dead_code)]
-pub struct ErrorDetail {
-    /// A stable code clients match on: bad_request, unauthorized, forbidden, not_found,
-    /// conflict, invalid_session, payload_too_large, unhealthy, export_failed, store_failed.
-    #[schema(example = "invalid_session")]
-    code: String,
-    message: String,
 }
 
 /// The generated document, as served.

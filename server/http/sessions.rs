@@ -6,11 +6,12 @@ use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde::{Deserialize, Serialize};
 
-use super::AppState;
-use super::auth::SessionAccess;
-use super::error::{ApiError, ApiResult};
 use super::json_body::JsonBody;
-use super::openapi::ErrorBody;
+use crate::api::AppState;
+use crate::api::auth::SessionAccess;
+use crate::api::error::{ApiError, ApiResult, ErrorBody};
+use crate::export::answers_csv::answers_csv;
+use crate::export::session_jsonl::{SessionRecords, session_jsonl};
 use crate::remote_env::RemoteTarget;
 use crate::session::spec::DEFAULT_QUERIES;
 use crate::session::{SessionMethod, SessionSpec, TrainerKind};
@@ -356,84 +357,25 @@ pub async fn export(
     let format = q.format.as_deref().unwrap_or("jsonl");
     let (body, content_type, ext) = match format {
         "jsonl" => {
-            let mut out = String::new();
             let session = view(&state, r).await?;
-            let mut line = |record: &str, value: serde_json::Value| {
-                let mut v = value;
-                v["record"] = record.into();
-                out.push_str(&v.to_string());
-                out.push('\n');
-            };
-            line(
-                "session",
-                serde_json::to_value(&session).unwrap_or_default(),
-            );
-            for a in &answers {
-                line("answer", serde_json::to_value(a).unwrap_or_default());
-            }
-            for e in state.store.episodes(&id).await? {
-                line("episode", serde_json::to_value(&e).unwrap_or_default());
-            }
-            // Per trainer, each one's own answers, and how much they agree.
-            for t in super::trainers::breakdown(&state, &id).await? {
-                line("trainer", serde_json::to_value(&t).unwrap_or_default());
-            }
-            for a in state.store.person_answers(&id).await? {
-                line(
-                    "trainer_answer",
-                    serde_json::to_value(&a).unwrap_or_default(),
-                );
-            }
+            let episodes = state.store.episodes(&id).await?;
+            let trainers = super::trainers::breakdown(&state, &id).await?;
+            let trainer_answers = state.store.person_answers(&id).await?;
             let row = super::trainers::session_row(&state, &id).await?;
             let agreement = super::trainers::session_agreement(&state, &row).await?;
-            line(
-                "agreement",
-                serde_json::to_value(&agreement).unwrap_or_default(),
-            );
-            (out, "application/x-ndjson", "jsonl")
+            let records = SessionRecords {
+                session: &session,
+                answers: &answers,
+                episodes: &episodes,
+                trainers: &trainers,
+                trainer_answers: &trainer_answers,
+                agreement: &agreement,
+            };
+            (session_jsonl(&records), "application/x-ndjson", "jsonl")
         }
         "csv" => {
-            let mut w = csv::Writer::from_writer(Vec::new());
-            let io = |e: csv::Error| ApiError::ExportFailed(e.to_string());
-            w.write_record([
-                "query_id",
-                "kind",
-                "step",
-                "abstract_state",
-                "value",
-                "who",
-                "trainer",
-                "asked_at",
-                "answered_at",
-                "latency_ms",
-                "revision",
-            ])
-            .map_err(io)?;
-            for a in &answers {
-                let value = serde_json::to_string(&a.value).unwrap_or_default();
-                w.write_record([
-                    a.query_id.to_string(),
-                    a.kind.as_str().to_string(),
-                    a.step.to_string(),
-                    a.abstract_state.to_string(),
-                    value.trim_matches('"').to_string(),
-                    a.who.as_str().to_string(),
-                    a.trainer.clone().unwrap_or_default(),
-                    a.asked_at.clone(),
-                    a.answered_at.clone(),
-                    a.latency_ms.to_string(),
-                    a.revision.to_string(),
-                ])
-                .map_err(io)?;
-            }
-            let bytes = w
-                .into_inner()
-                .map_err(|e| ApiError::ExportFailed(e.to_string()))?;
-            (
-                String::from_utf8_lossy(&bytes).into_owned(),
-                "text/csv",
-                "csv",
-            )
+            let text = answers_csv(&answers).map_err(|e| ApiError::ExportFailed(e.to_string()))?;
+            (text, "text/csv", "csv")
         }
         other => {
             return Err(ApiError::BadRequest(format!(

@@ -8,12 +8,11 @@ use axum::extract::{Path, State};
 use axum::http::StatusCode;
 use serde::{Deserialize, Serialize};
 
-use super::AppState;
-use super::auth::SessionAccess;
-use super::error::{ApiError, ApiResult};
 use super::json_body::JsonBody;
-use super::openapi::ErrorBody;
 use super::trainer_views::{AgreementView, TrainerStats, agreement, personal_url, trainer_stats};
+use crate::api::AppState;
+use crate::api::auth::SessionAccess;
+use crate::api::error::{ApiError, ApiResult, ErrorBody};
 use crate::hub::{Identity, random_hex};
 use crate::session::QueryKind;
 use crate::store::{AddTrainer, SessionRow, TrainerOrigin, TrainerRow, check_name};

@@ -18,8 +18,8 @@ use super::answers::Undoable;
 use super::episode_frames::EpisodeFrames;
 use super::handle::{Command, Identity, Joined, SessionHandle, Snapshot};
 use crate::protocol::{ProgressMessage, QueryId, QueryKind, ServerMessage, WithdrawReason};
-use crate::session::combine::Combine;
 use crate::session::{AnswerValue, Control, Ending, SessionEvent, SessionPlan};
+use crate::settings::Combine;
 use crate::sim::Geometry;
 use crate::store::{Status, Store, SyntheticAnswer, TrainerRef};
 

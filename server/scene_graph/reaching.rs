@@ -54,6 +54,27 @@ mod tests {
         evaluate(&[x, y]).to_bit_string(6)
     }
 
+    /// The sim's goal test and this graph's "centred in x and in y" are one region.
+    #[test]
+    fn goal_matches_the_sims_goal() {
+        use crate::sim::reaching as sim;
+        assert_eq!(
+            (GOAL_HALF_X, GOAL_HALF_Y),
+            (sim::GOAL_HALF_X, sim::GOAL_HALF_Y)
+        );
+        for p in [
+            [0.05, 0.0],
+            [0.0501, 0.0],
+            [0.0, -0.125],
+            [0.0, -0.1251],
+            [0.3, 0.3],
+        ] {
+            let bits = evaluate(&p).to_bit_string(6);
+            let centred = &bits[1..2] == "1" && &bits[4..5] == "1";
+            assert_eq!(sim::in_goal(p), centred, "{p:?}");
+        }
+    }
+
     #[test]
     fn x_band_on_both_sides_of_each_threshold() {
         assert_eq!(&bits(-0.0501, 0.0)[..3], "100");

@@ -1,39 +1,18 @@
 //! How a query's answers combine when a session takes several (k answers from different named
-//! trainers): `first` (one answer, the first committed: the default), `majority` or `mean` of
-//! +1 / 0 / -1 (evaluative), `each` (preference: every answer enters the belief as its own
-//! observation, as APReL does with several users). Pure.
-
-use serde::{Deserialize, Serialize};
+//! trainers), by the rule its settings name ([`Combine`]): `first` (one answer, the first
+//! committed: the default), `majority` or `mean` of +1 / 0 / -1 (evaluative), `each`
+//! (preference: every answer enters the belief as its own observation, as APReL does with
+//! several users). Pure.
+//!
+//! The rule's name is a setting and lives in `settings`; what it does with answers needs the
+//! session's answer types, so it is implemented here, where those are.
 
 use super::events::{AnswerValue, QueryKind};
 use crate::guidance::drpl::trainer::{Preference, PreferenceTally};
 use crate::guidance::evaluative_trainer::MeanLabel;
-
-/// The rule a session combines its trainers' answers by.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum Combine {
-    /// One answer per query: the first committed wins (the others get `already_answered`).
-    #[default]
-    First,
-    /// Evaluative: the value most trainers gave; a tie is 0 ("no feedback").
-    Majority,
-    /// Evaluative: the mean of the +1 / 0 / -1 answers (a fraction when they differ).
-    Mean,
-    /// Preference: every answer is its own observation of the belief.
-    Each,
-}
+use crate::settings::Combine;
 
 impl Combine {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Combine::First => "first",
-            Combine::Majority => "majority",
-            Combine::Mean => "mean",
-            Combine::Each => "each",
-        }
-    }
-
     /// Whether the rule combines answers of `kind`.
     pub fn fits(self, kind: QueryKind) -> bool {
         match self {

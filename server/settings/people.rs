@@ -4,8 +4,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::Combine;
 use crate::guidance::teacher::TeacherFaults;
-use crate::session::combine::Combine;
 
 /// `teacher_beta`: a rationality, or the word `rational` (a teacher that never errs by chance).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]

@@ -3,9 +3,9 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::Combine;
 use super::people;
 use crate::rl::kernels::KernelPath;
-use crate::session::combine::Combine;
 
 /// A human session's control rate when the researcher does not set `pace_hz`: the robot's own.
 pub const DEFAULT_PACE_HZ: f64 = 20.0;

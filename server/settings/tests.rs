@@ -162,6 +162,41 @@ fn preference_settings_reach_the_run() {
 }
 
 #[test]
+fn preference_settings_override_by_name_and_reject_nonsense() {
+    let settings = |pairs: &[(&str, &str)]| Settings::from_pairs(pairs.iter().copied());
+    let c = settings(&[
+        ("trajectories", "12"),
+        ("min_run", "1"),
+        ("acquisition", "mutual-information"),
+        ("samples", "50"),
+        ("beta", "2.5"),
+        ("side_engines_on_a0", "true"),
+    ])
+    .unwrap()
+    .preference(Task::LunarLander, QueryMethod::Drpl, 0)
+    .unwrap();
+    assert_eq!((c.trajectories, c.min_run, c.belief.samples), (12, 1, 50));
+    assert_eq!(c.acquisition, Acquisition::MutualInformation);
+    assert_eq!(c.belief.beta, 2.5);
+    for bad in [
+        ("trajectories", "1"),
+        ("beta", "nan"),
+        ("thinning", "0"),
+        ("hidden", "3"),
+    ] {
+        let refused =
+            settings(&[bad]).and_then(|s| s.preference(Task::LunarLander, QueryMethod::Drpl, 0));
+        assert!(refused.is_err(), "{bad:?}");
+    }
+    assert!(
+        settings(&[("side_engines_on_a0", "true")])
+            .unwrap()
+            .preference(Task::Reaching, QueryMethod::Drpl, 0)
+            .is_err()
+    );
+}
+
+#[test]
 fn session_settings_default_and_validate() {
     let none = Settings::default().session().unwrap();
     assert_eq!(none.pace_hz, DEFAULT_PACE_HZ);
@@ -478,4 +513,15 @@ fn the_silence_wake_is_a_setting_of_its_own_and_off_by_default() {
     assert_eq!(waking.query_rule.build().silent_steps(), Some(0));
     let not_a_number = Settings::from_pairs([("wake_after", "soon")]).unwrap_err();
     assert!(not_a_number.contains("wake_after"), "{not_a_number}");
+}
+
+#[test]
+fn the_keys_are_the_sections_fields_each_once() {
+    let keys = Settings::keys();
+    for (i, key) in keys.iter().enumerate() {
+        assert!(!keys[..i].contains(key), "{key} is in two sections");
+    }
+    // The list the unknown-key error gives is this one.
+    let e = Settings::from_pairs([("no_such_key", "1")]).unwrap_err();
+    assert!(e.ends_with(&format!("`{}`", keys.last().unwrap())), "{e}");
 }

@@ -236,26 +236,6 @@ mod tests {
     use super::*;
 
     #[test]
-    fn goal_matches_the_scene_graph_bands() {
-        use crate::scene_graph::reaching as sg;
-        assert_eq!(
-            (GOAL_HALF_X, GOAL_HALF_Y),
-            (sg::GOAL_HALF_X, sg::GOAL_HALF_Y)
-        );
-        for p in [
-            [0.05, 0.0],
-            [0.0501, 0.0],
-            [0.0, -0.125],
-            [0.0, -0.1251],
-            [0.3, 0.3],
-        ] {
-            let bits = sg::evaluate(&p).to_bit_string(6);
-            let centred = &bits[1..2] == "1" && &bits[4..5] == "1";
-            assert_eq!(in_goal(p), centred, "{p:?}");
-        }
-    }
-
-    #[test]
     fn reset_starts_outside_the_goal_after_100_moves() {
         for variant in [Variant::Authors, Variant::Uniform] {
             let mut env = Reaching::with_variant(variant);

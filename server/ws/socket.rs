@@ -12,9 +12,9 @@ use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
 use axum::response::{IntoResponse, Response};
 use tokio::sync::broadcast::error::RecvError;
 
-use crate::http::AppState;
-use crate::http::auth::SessionAccess;
-use crate::http::error::ApiError;
+use crate::api::AppState;
+use crate::api::auth::SessionAccess;
+use crate::api::error::{ApiError, ErrorBody};
 use crate::hub::{AnswerReply, Identity, Joined, SessionHandle};
 use crate::protocol::{
     ClientMessage, ErrorCode, ProtocolError, QueryId, ServerMessage, id_of, parse_client,
@@ -40,7 +40,7 @@ pub const MAX_MESSAGE_BYTES: usize = 4 * 1024;
     ),
     responses(
         (status = 101, description = "Switching to the websocket protocol"),
-        (status = "default", description = "An error", body = crate::http::openapi::ErrorBody)
+        (status = "default", description = "An error", body = ErrorBody)
     )
 )]
 pub async fn upgrade(

@@ -3,8 +3,8 @@
 
 use std::sync::Arc;
 
+use dualrep::api::AppState;
 use dualrep::cli::serve::{Running, ServeArgs, start};
-use dualrep::http::AppState;
 use dualrep::hub::{Hub, HubConfig};
 use dualrep::store::Store;
 use serde_json::Value;

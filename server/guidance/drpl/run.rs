@@ -364,42 +364,6 @@ mod tests {
         assert_ne!(other.theta_true(), run.theta_true());
     }
 
-    #[test]
-    fn settings_override_by_name_and_reject_nonsense() {
-        let settings =
-            |pairs: &[(&str, &str)]| crate::settings::Settings::from_pairs(pairs.iter().copied());
-        let c = settings(&[
-            ("trajectories", "12"),
-            ("min_run", "1"),
-            ("acquisition", "mutual-information"),
-            ("samples", "50"),
-            ("beta", "2.5"),
-            ("side_engines_on_a0", "true"),
-        ])
-        .unwrap()
-        .preference(Task::LunarLander, QueryMethod::Drpl, 0)
-        .unwrap();
-        assert_eq!((c.trajectories, c.min_run, c.belief.samples), (12, 1, 50));
-        assert_eq!(c.acquisition, Acquisition::MutualInformation);
-        assert_eq!(c.belief.beta, 2.5);
-        for bad in [
-            ("trajectories", "1"),
-            ("beta", "nan"),
-            ("thinning", "0"),
-            ("hidden", "3"),
-        ] {
-            let refused = settings(&[bad])
-                .and_then(|s| s.preference(Task::LunarLander, QueryMethod::Drpl, 0));
-            assert!(refused.is_err(), "{bad:?}");
-        }
-        assert!(
-            settings(&[("side_engines_on_a0", "true")])
-                .unwrap()
-                .preference(Task::Reaching, QueryMethod::Drpl, 0)
-                .is_err()
-        );
-    }
-
     /// Skips count as queries but teach the belief nothing.
     #[test]
     fn skips_are_recorded_without_an_update() {

@@ -5,6 +5,7 @@ use axum::Json;
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 use serde_json::json;
+use utoipa::ToSchema;
 
 use crate::hub::HubError;
 
@@ -114,6 +115,23 @@ impl From<HubError> for ApiError {
 }
 
 pub type ApiResult<T> = Result<T, ApiError>;
+
+/// Every refusal: `{"error": {"code": "...", "message": "..."}}`.
+#[derive(ToSchema)]
+#[allow(dead_code)] // documentation only: `ApiError` writes this shape
+pub struct ErrorBody {
+    error: ErrorDetail,
+}
+
+#[derive(ToSchema)]
+#[allow(dead_code)]
+pub struct ErrorDetail {
+    /// A stable code clients match on: bad_request, unauthorized, forbidden, not_found,
+    /// conflict, invalid_session, payload_too_large, unhealthy, export_failed, store_failed.
+    #[schema(example = "invalid_session")]
+    code: String,
+    message: String,
+}
 
 #[cfg(test)]
 mod tests {
