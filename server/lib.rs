@@ -29,8 +29,9 @@
 //!   server only through channels; its `SessionPlan` (spec, session settings, run config, scene
 //!   graph, query kind) is validated once, at launch or resume, and shared by the hub, the
 //!   thread and the trainer's `hello`; pacing, queries to people, replay of stored answers on
-//!   resume (on a remote env, which cannot replay, its latest whole-run checkpoint instead),
-//!   checkpoints. No async runtime, no database.
+//!   resume (on a remote env, which cannot replay, its latest whole-run checkpoint instead, then
+//!   the stored answers to the moments it meets again), checkpoints. No async runtime, no
+//!   database.
 //!
 //! The edge (files, processes, network, database):
 //!

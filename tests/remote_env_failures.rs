@@ -1,12 +1,15 @@
 //! A session on an env that dies mid-run (a small env server on a thread, no Python): the
 //! progress the failed session reports is the step its reason names, and a resume answers,
-//! and keeps, the progress the session had made.
+//! and keeps, the progress the session had made. A human session stopped after answering past
+//! its checkpoint resumes without asking an answered moment again.
 
+use std::collections::BTreeMap;
 use std::io::{Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::time::{Duration, Instant};
 
 use crate::support::server::{Api, serve};
+use crate::support::trainer::{Trainer, token_of};
 use serde_json::{Value, json};
 
 /// The env answers this many steps, then closes the connection on the next.
@@ -57,6 +60,54 @@ fn dying_env() -> String {
                 _ => return,
             };
             write(&mut s, &reply);
+        }
+    });
+    url
+}
+
+/// An env of its own task on a free port, serving every connection (a resumed session connects
+/// again). `repeats`: each reset starts the same episode, as an env server written from
+/// `docs/env-protocol.md` for a simulator may; else each connection starts from elsewhere, as
+/// a robot would.
+fn line_env(repeats: bool) -> String {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let url = format!("tcp://{}", listener.local_addr().unwrap());
+    std::thread::spawn(move || {
+        for (connection, stream) in listener.incoming().enumerate() {
+            let Ok(mut s) = stream else { return };
+            let start = if repeats {
+                0.0
+            } else {
+                0.3 * connection as f64
+            };
+            std::thread::spawn(move || {
+                while let Some(request) = read(&mut s) {
+                    let reply = match request["type"].as_str().unwrap() {
+                        "hello" => json!({"type": "hello", "protocol": 1, "env": {
+                            "id": "line",
+                            "observation_space": {"shape": [2], "low": [-1, -1], "high": [1, 1]},
+                            "action_space": {"shape": [1], "low": [-1], "high": [1]},
+                            "control_hz": 10,
+                            "max_episode_steps": 20,
+                            "predicates": [{"name": "right", "label": "point right"}],
+                            "deterministic": true
+                        }}),
+                        "reset" => json!({"type": "reset", "obs": [start, 0.0]}),
+                        "step" => {
+                            let a = request["action"][0].as_f64().unwrap();
+                            json!({"type": "step", "obs": [a, 0.0], "reward": -a.abs(),
+                                   "terminated": false, "truncated": false,
+                                   "holding": if a > 0.0 { json!(["right"]) } else { json!([]) }})
+                        }
+                        "close" => {
+                            write(&mut s, &json!({"type": "close"}));
+                            return;
+                        }
+                        _ => return,
+                    };
+                    write(&mut s, &reply);
+                }
+            });
         }
     });
     url
@@ -115,4 +166,112 @@ async fn a_failed_session_reports_the_step_it_failed_at_and_a_resume_keeps_it() 
     );
     assert_eq!(again["progress"], DIES_AT_STEP, "{again}");
     server.shutdown().await.unwrap();
+}
+
+/// Issue 35: a human session on a remote env, stopped after answering queries past its latest
+/// checkpoint, resumes at that checkpoint and replays the same moments on a deterministic env:
+/// the answered ones take their stored answers, and no query after the resume repeats an
+/// answered moment (same step and action) or an answered query's id; the query left open is
+/// asked again under its id.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_resumed_remote_session_never_asks_an_answered_moment_again() {
+    let (open, after) = answer_past_checkpoint_stop_and_resume(true).await;
+    assert_eq!(
+        (&after[0]["id"], &after[0]["step"], &after[0]["action"]),
+        (&open["id"], &open["step"], &open["action"]),
+        "{}",
+        after[0]
+    );
+}
+
+/// On an env that does not repeat its episodes (a robot) the resumed run meets other moments:
+/// the queries after the checkpoint stay stored, and new ones are numbered after all of them.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_resumed_remote_session_on_a_robot_numbers_new_queries_after_the_stored_ones() {
+    let (open, after) = answer_past_checkpoint_stop_and_resume(false).await;
+    let first_new = open["id"].as_i64().unwrap() + 1;
+    let ids: Vec<i64> = after.iter().map(|q| q["id"].as_i64().unwrap()).collect();
+    assert_eq!(ids, (first_new..first_new + 3).collect::<Vec<_>>());
+    assert_eq!(after[0]["step"], 20, "the run resumed at its checkpoint");
+}
+
+/// A human EF-100 session on [`line_env`]: answer every query up to three past the checkpoint
+/// at step 20, stop with the next one open, resume, and answer the first three queries after
+/// the resume, checking that none is an answered one by id or by moment. Returns the query
+/// left open and those three.
+async fn answer_past_checkpoint_stop_and_resume(repeats: bool) -> (Value, Vec<Value>) {
+    const WAIT: Duration = Duration::from_secs(60);
+    /// Episodes are 20 steps: the checkpoint after the first answered episode is at step 20.
+    const ANSWERED_PAST_CHECKPOINT: u64 = 3;
+    let dir = tempfile::tempdir().unwrap();
+    let server = serve(dir.path()).await;
+    let api = Api::new(server.addr);
+    let (status, launched) = api
+        .post(
+            "/api/sessions",
+            json!({"env": {"url": line_env(repeats)}, "method": "ef-100", "trainer": "human",
+                   "seed": 3, "steps": 200,
+                   "params": {"hidden": [8, 8], "batch_size": 16, "record": false,
+                              "pace_hz": 200, "answer_timeout_s": 60}}),
+        )
+        .await;
+    assert_eq!(status, 201, "{launched}");
+    let id = launched["id"].as_str().unwrap().to_string();
+    let token = token_of(launched["trainer_url"].as_str().unwrap());
+
+    // Answer every query up to three steps past the checkpoint at step 20; leave the next open.
+    let mut t = Trainer::connect(server.addr, &id, &token).await;
+    let mut answered: BTreeMap<i64, (u64, Value)> = BTreeMap::new();
+    let open = loop {
+        let q = t.next_of(&["query"], WAIT).await;
+        let step = q["step"].as_u64().unwrap();
+        if step >= 20 + ANSWERED_PAST_CHECKPOINT {
+            break q;
+        }
+        let qid = q["id"].as_i64().unwrap();
+        t.answer(qid, json!(if step % 2 == 0 { 1 } else { -1 }))
+            .await;
+        let ack = t.next_of(&["ack"], WAIT).await;
+        assert_eq!(ack["id"], qid, "{ack}");
+        answered.insert(qid, (step, q["action"].clone()));
+    };
+    assert_eq!(answered.len() as u64, 20 + ANSWERED_PAST_CHECKPOINT);
+    let (status, _) = api
+        .post(&format!("/api/sessions/{id}/stop"), json!({}))
+        .await;
+    assert_eq!(status, 200);
+    assert_eq!(settled(&api, &id).await["status"], "stopped");
+    t.close().await;
+
+    let (status, resumed) = api
+        .post(&format!("/api/sessions/{id}/resume"), json!({}))
+        .await;
+    assert_eq!(status, 200, "{resumed}");
+    let mut t = Trainer::connect(server.addr, &id, &token).await;
+    // The first queries after the resume: none is an answered one, by id or by moment.
+    let mut after = Vec::new();
+    for _ in 0..3 {
+        let q = t.next_of(&["query"], WAIT).await;
+        let (qid, step) = (q["id"].as_i64().unwrap(), q["step"].as_u64().unwrap());
+        assert!(
+            !answered.contains_key(&qid),
+            "query {qid} was answered: {q}"
+        );
+        for (done, (done_step, done_action)) in &answered {
+            assert!(
+                !(step == *done_step && q["action"] == *done_action),
+                "query {qid} asks again the moment of answered query {done} (step {step}, action {}): {q}",
+                q["action"]
+            );
+        }
+        t.answer(qid, json!(1)).await;
+        assert_eq!(t.next_of(&["ack"], WAIT).await["id"], qid);
+        after.push(q);
+    }
+    api.post(&format!("/api/sessions/{id}/stop"), json!({}))
+        .await;
+    settled(&api, &id).await;
+    t.close().await;
+    server.shutdown().await.unwrap();
+    (open, after)
 }

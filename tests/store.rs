@@ -2,7 +2,7 @@
 
 use dualrep::guidance::drpl::trainer::Preference;
 use dualrep::guidance::evaluative_run::EpisodeRecord;
-use dualrep::session::{AnswerValue, Answerer, QueryKind};
+use dualrep::session::{AnswerValue, Answerer, QueryKind, StoredMoment};
 use dualrep::sim::Outcome;
 use dualrep::store::{CommitOutcome, NewSession, Status, Store, SyntheticAnswer};
 use sqlx::SqlitePool;
@@ -68,6 +68,51 @@ async fn the_first_committed_answer_wins_and_repeats_are_idempotent(pool: Sqlite
         (17, good, 120)
     );
     assert_eq!(answers[0].who, Answerer::Trainer);
+}
+
+/// What a resumed remote session catches up on: each evaluative query's step, the action of
+/// its stored transition (none without one) and its answer, if any.
+#[sqlx::test]
+async fn stored_moments_carry_each_querys_step_action_and_answer(pool: SqlitePool) {
+    let store = store_with_session(pool, "s1").await;
+    let data = r#"{"kind": "evaluative", "observation": [0.0], "action": [0.25, -0.830583],
+                   "reward": 0.0, "next_observation": [0.0]}"#;
+    let answered = store
+        .upsert_query("s1", 0, QueryKind::Evaluative, 7, 1, "{}", Some(data))
+        .await
+        .unwrap();
+    store
+        .upsert_query("s1", 1, QueryKind::Evaluative, 8, 0, "{}", None)
+        .await
+        .unwrap();
+    store
+        .commit_answer(
+            answered,
+            "s1",
+            AnswerValue::Evaluation(-1),
+            Answerer::Trainer,
+            None,
+            5,
+        )
+        .await
+        .unwrap();
+    assert_eq!(
+        store.stored_moments("s1").await.unwrap(),
+        vec![
+            StoredMoment {
+                seq: 0,
+                step: 7,
+                action: Some(vec![0.25, -0.830583]),
+                value: Some(AnswerValue::Evaluation(-1)),
+            },
+            StoredMoment {
+                seq: 1,
+                step: 8,
+                action: None,
+                value: None,
+            },
+        ]
+    );
 }
 
 #[sqlx::test]

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use crate::remote_env::{RemoteTarget, Timeouts};
-use crate::session::{Reconnect, RemoteSession, SessionSpec};
+use crate::session::{Reconnect, RemoteSession, SessionSpec, StoredMoment};
 use crate::sim::Env;
 
 /// What the session thread needs to reach its env.
@@ -16,6 +16,8 @@ pub struct RemotePlan {
     /// `<data dir>/checkpoints/<id>.resume`.
     pub resume_path: PathBuf,
     pub stored_queries: u64,
+    /// The stored evaluative queries a resumed run catches up on.
+    pub stored_moments: Vec<StoredMoment>,
 }
 
 impl RemotePlan {
@@ -49,6 +51,7 @@ impl RemotePlan {
             reconnect,
             resume_from,
             stored_queries: self.stored_queries,
+            stored_moments: self.stored_moments,
         })
     }
 }

@@ -45,6 +45,14 @@ impl Owner {
                     .query_count(&id)
                     .await
                     .map_err(|e| format!("reading the session's queries: {e}"))?,
+                stored_moments: if plan.spec.method.is_preference() {
+                    Vec::new()
+                } else {
+                    self.store
+                        .stored_moments(&id)
+                        .await
+                        .map_err(|e| format!("reading the session's queries: {e}"))?
+                },
             }),
         };
         let options = RecordingOptions {

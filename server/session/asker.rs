@@ -19,7 +19,7 @@ use super::events::{
     AnswerValue, Controls, Observer, QueryKind, Revision, SessionEvent, SessionSink, StoredRevision,
 };
 use super::query::{self, FrameHistory, QueryContent, QueryData, SegmentData};
-use super::remote::Reconnect;
+use super::remote::{Reconnect, StoredMoment};
 use super::runner::SessionContext;
 
 /// Load an expert written by `dualrep expert` (the synthetic evaluative trainer consults it).
@@ -66,6 +66,14 @@ pub(super) struct Asker {
     pub(super) fault: Option<String>,
     /// A person answered since the last call of [`Asker::take_answered`].
     answered_live: bool,
+    /// A remote session resumed from a checkpoint: the queries stored after it, from `seq` on,
+    /// that the run may meet again (see `remote`); caught up while `seq < stored_end`.
+    catch_up: VecDeque<StoredMoment>,
+    /// Session query numbers stored before the resume: the catch-up ends here.
+    stored_end: u64,
+    /// Session query numbers the catch-up gave up on (the run did not meet their moments
+    /// again), as `[start, end)` ranges, for the session's `QueryNumbering`.
+    lost: Vec<(u64, u64)>,
     pub(super) observer: Option<Box<dyn Observer>>,
 }
 
@@ -90,16 +98,28 @@ impl Asker {
             aborted: false,
             fault: None,
             answered_live: false,
+            catch_up: VecDeque::new(),
+            stored_end: 0,
+            lost: Vec::new(),
             observer,
         }
     }
 
-    /// Ask new queries from session query number `next` on, replaying nothing (a remote
-    /// session resumed from a checkpoint after `steps` steps: its stored answers are in the run
-    /// or lost with it), and apply the stored revisions the checkpoint does not hold (applied
-    /// at `steps` or later, or never) at once.
-    pub(super) fn continue_at(&mut self, next: u64, steps: u64) {
+    /// Go on from session query number `next` (a remote session resumed from a checkpoint
+    /// after `steps` steps, with `stored_end` query numbers stored): no replay from step 0, but
+    /// a catch-up on the stored queries numbered `next` or later, whose moments the run may
+    /// meet again; and apply the stored revisions the checkpoint does not hold (applied at
+    /// `steps` or later, or never) once the catch-up is over.
+    pub(super) fn continue_at(
+        &mut self,
+        next: u64,
+        stored_end: u64,
+        steps: u64,
+        stored: Vec<StoredMoment>,
+    ) {
         self.seq = next;
+        self.stored_end = stored_end.max(next);
+        self.catch_up = stored.into_iter().filter(|m| m.seq >= next).collect();
         self.replay.clear();
         self.replay_revisions = std::mem::take(&mut self.replay_revisions)
             .into_iter()
@@ -109,6 +129,66 @@ impl Asker {
                 ..r
             })
             .collect();
+    }
+
+    /// Whether the run is still catching up on queries stored after its checkpoint.
+    pub(super) fn catching_up(&self) -> bool {
+        self.seq < self.stored_end
+    }
+
+    /// The stored answer to the moment `(step, action)` the run asks about, if it is the next
+    /// stored query's: it is taken without asking (the caller reports it with
+    /// [`Asker::replayed`]). A stored query that was left unanswered is asked again under its
+    /// own number. Any other moment ends the catch-up.
+    fn caught_up(&mut self, step: u64, action: &[f32]) -> Option<AnswerValue> {
+        if !self.catching_up() {
+            return None;
+        }
+        let met = self.catch_up.front().is_some_and(|m| {
+            m.seq == self.seq && m.step == step && m.action.as_deref() == Some(action)
+        });
+        if !met {
+            self.give_up_catch_up();
+            return None;
+        }
+        self.catch_up.pop_front().and_then(|m| m.value)
+    }
+
+    /// End the catch-up once the run is past the next stored query's step (`steps` steps done)
+    /// without having met it.
+    pub(super) fn settle_catch_up(&mut self, steps: u64) {
+        if self.catching_up() && self.catch_up.front().is_none_or(|m| m.step < steps) {
+            self.give_up_catch_up();
+        }
+    }
+
+    /// The run did not meet the stored queries from `seq` on again: they stay stored but the
+    /// run lost them, and new queries are numbered after every stored one.
+    fn give_up_catch_up(&mut self) {
+        if self.catching_up() {
+            self.lost.push((self.seq, self.stored_end));
+            self.seq = self.stored_end;
+        }
+        self.catch_up.clear();
+    }
+
+    /// The ranges of query numbers the catch-up gave up on since the last call.
+    pub(super) fn take_lost(&mut self) -> Vec<(u64, u64)> {
+        std::mem::take(&mut self.lost)
+    }
+
+    /// A stored answer is the next query's (replayed or caught up on): nobody is asked.
+    fn replayed(
+        &mut self,
+        step: u64,
+        kind: QueryKind,
+        describe: String,
+        value: AnswerValue,
+    ) -> AnswerValue {
+        let seq = self.seq;
+        self.seq += 1;
+        self.observe(|o| o.query(step, seq, kind, describe));
+        self.answered(step, seq, value)
     }
 
     /// Whether a person answered since the last call.
@@ -140,7 +220,7 @@ impl Asker {
         while let Some(r) = self.replay_revisions.front() {
             let now = match r.applied_at {
                 Some(at) => at <= progress,
-                None => !self.replaying(),
+                None => !self.replaying() && !self.catching_up(),
             };
             if !now {
                 break;
@@ -166,10 +246,7 @@ impl Asker {
         content: impl FnOnce() -> Result<(QueryContent, QueryData), String>,
     ) -> Option<AnswerValue> {
         if let Some(v) = self.replay.pop_front() {
-            let seq = self.seq;
-            self.seq += 1;
-            self.observe(|o| o.query(step, seq, kind, describe));
-            return Some(self.answered(step, seq, v));
+            return Some(self.replayed(step, kind, describe, v));
         }
         if self.controls.halted().is_some() {
             self.aborted = true;
@@ -267,6 +344,27 @@ impl EvaluativeTrainer for EvaluativeAsker {
     }
 
     fn evaluate(&mut self, q: &EvaluativeQuery<'_>) -> Evaluation {
+        // A resumed remote run meeting a moment answered after its checkpoint: the stored
+        // answer, asked of nobody (the oracle is still consulted, so that its random stream
+        // goes on as it did the first time).
+        if let Some(stored) = self.asker.caught_up(q.step, q.action) {
+            let describe = match &mut self.judge {
+                Judge::Human { graph, .. } => describe_evaluative(graph, q),
+                Judge::Synthetic { oracle, graph } => {
+                    oracle.evaluate(q);
+                    if self.asker.observer.is_some() {
+                        describe_evaluative(graph, q)
+                    } else {
+                        String::new()
+                    }
+                }
+            };
+            return self
+                .asker
+                .replayed(q.step, QueryKind::Evaluative, describe, stored)
+                .as_evaluation()
+                .unwrap_or(Evaluation::NoFeedback);
+        }
         match &mut self.judge {
             Judge::Human { history, graph } => self
                 .asker

@@ -1,7 +1,8 @@
 //! An evaluative session's loop (DREF, EF-p%, SAC): one env step and one learning step per
 //! tick, paced for people, frames to browsers, queries through the asker, revisions (undos)
 //! applied, checkpoints. On our simulator a resume replays the stored answers from step 0; on
-//! a remote env it continues from the latest run checkpoint (module `remote`).
+//! a remote env it continues from the latest run checkpoint and catches up on the answers
+//! stored after it (module `remote`).
 
 use std::time::{Duration, Instant};
 
@@ -114,6 +115,7 @@ pub(super) fn run(
                 mut env,
                 resume_from,
                 stored_queries,
+                stored_moments,
                 ..
             } = r;
             env.set_frames(human);
@@ -132,8 +134,11 @@ pub(super) fn run(
                     0,
                 ),
             };
-            let numbering = QueryNumbering::resumed(saved, stored_queries);
-            trainer.asker.continue_at(numbering.next, run.steps());
+            // The numbering as of the checkpoint: the catch-up adds what it gives up on.
+            let numbering = saved.unwrap_or_default();
+            trainer
+                .asker
+                .continue_at(numbering.next, stored_queries, run.steps(), stored_moments);
             let rule = CheckpointRule::new(settings.checkpoint_every, run.steps(), human);
             (run, Some(Resumable { rule, numbering }), episode)
         }
@@ -261,6 +266,8 @@ fn drive(
                 }
             }
             Some(x) => {
+                trainer.asker.settle_catch_up(run.steps());
+                x.numbering.lost.extend(trainer.asker.take_lost());
                 if trainer.asker.take_answered() {
                     x.rule.answered();
                 }

@@ -32,6 +32,6 @@ pub use events::{
 };
 pub use plan::{PlanError, SessionPlan};
 pub use query::{Clip, QueryContent, QueryData, SegmentData};
-pub use remote::{QueryNumbering, Reconnect, RemoteSession};
+pub use remote::{QueryNumbering, Reconnect, RemoteSession, StoredMoment};
 pub use runner::{SessionContext, digest, run_session};
 pub use spec::{SessionMethod, SessionSettings, SessionSpec, TrainerKind};

@@ -4,15 +4,20 @@
 //!
 //! - an evaluative session saves its whole run (learner, replay buffer, query-rule state,
 //!   random streams; `guidance::run_checkpoint`) at episode starts and resumes from the latest
-//!   one. Queries asked after that checkpoint keep their stored answers and numbers, but the
-//!   run forgot them with the episode the env lost: new queries are numbered after every stored
-//!   one, so nobody is ever asked an answered query again, and [`QueryNumbering`] maps the
-//!   session's query numbers to the run's.
+//!   one. The run then catches up on the queries stored after that checkpoint
+//!   ([`StoredMoment`]): an env that repeats its episodes (a simulator) brings back the same
+//!   moments, and each one that meets the next stored query (same step, same action) takes its
+//!   stored answer, under its number, without asking anyone. The first moment that differs
+//!   (a robot) ends the catch-up: the queries not met again keep their stored answers and
+//!   numbers, the run lost them with the episode, and new queries are numbered after every
+//!   stored one. Either way nobody is asked an answered query again, by number or by moment,
+//!   and [`QueryNumbering`] maps the session's query numbers to the run's.
 //! - a preference session keeps the trajectories it recorded on the env, and resumes by
 //!   replaying its stored answers over them (no env step is replayed).
 
 use serde::{Deserialize, Serialize};
 
+use super::events::AnswerValue;
 use crate::remote_env::RemoteDescription;
 use crate::sim::{Env, EnvFault};
 
@@ -30,6 +35,20 @@ pub struct RemoteSession {
     pub resume_from: Option<Vec<u8>>,
     /// Queries stored for the session so far (answered or not): new ones are numbered after.
     pub stored_queries: u64,
+    /// The session's stored evaluative queries, in query order: a resumed run catches up on
+    /// those after its checkpoint.
+    pub stored_moments: Vec<StoredMoment>,
+}
+
+/// A stored evaluative query: the moment it asked about and its answer, if it got one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StoredMoment {
+    pub seq: u64,
+    pub step: u64,
+    /// The action asked about, normalised to [-1, 1] (none: stored without its transition).
+    pub action: Option<Vec<f32>>,
+    /// The answer as first given (an undo is applied as a stored revision).
+    pub value: Option<AnswerValue>,
 }
 
 /// Which of the session's query numbers the run knows, and under which of its own: numbers
@@ -43,17 +62,6 @@ pub struct QueryNumbering {
 }
 
 impl QueryNumbering {
-    /// The numbering after a resume from a checkpoint whose notes had `saved` (none: the run
-    /// starts from step 0), with `stored_queries` queries in the store.
-    pub fn resumed(saved: Option<QueryNumbering>, stored_queries: u64) -> Self {
-        let mut n = saved.unwrap_or_default();
-        if stored_queries > n.next {
-            n.lost.push((n.next, stored_queries));
-            n.next = stored_queries;
-        }
-        n
-    }
-
     /// The run's query index of session query `seq` (`None`: the run lost it).
     pub fn run_query(&self, seq: u64) -> Option<usize> {
         let mut skipped = 0;
@@ -121,26 +129,21 @@ mod tests {
     #[test]
     fn lost_queries_are_skipped_and_the_rest_map_to_the_run() {
         // The run checkpointed after query 4; queries 5..8 were answered and lost.
-        let n = QueryNumbering::resumed(
-            Some(QueryNumbering {
-                lost: vec![],
-                next: 5,
-            }),
-            8,
-        );
-        assert_eq!(n.next, 8);
+        let n = QueryNumbering {
+            lost: vec![(5, 8)],
+            next: 8,
+        };
         assert_eq!(n.run_query(4), Some(4));
         assert_eq!(n.run_query(6), None);
         assert_eq!(n.run_query(8), Some(5));
         // A second loss later: 10..12.
-        let n = QueryNumbering::resumed(Some(QueryNumbering { next: 10, ..n }), 12);
-        assert_eq!(n.lost, vec![(5, 8), (10, 12)]);
+        let n = QueryNumbering {
+            lost: vec![(5, 8), (10, 12)],
+            next: 12,
+        };
         assert_eq!(n.run_query(9), Some(6));
         assert_eq!(n.run_query(11), None);
         assert_eq!(n.run_query(12), Some(7));
-        // No checkpoint yet: everything stored is lost; nothing stored, nothing lost.
-        assert_eq!(QueryNumbering::resumed(None, 3).lost, vec![(0, 3)]);
-        assert_eq!(QueryNumbering::resumed(None, 0), QueryNumbering::default());
     }
 
     #[test]

@@ -6,7 +6,7 @@ use serde::Serialize;
 use sqlx::Row;
 
 use super::{Result, Store};
-use crate::session::{AnswerValue, Answerer, QueryKind};
+use crate::session::{AnswerValue, Answerer, QueryKind, StoredMoment};
 
 /// One asked query.
 #[derive(Clone, Debug, Serialize)]
@@ -233,6 +233,33 @@ impl Store {
             }
         }
         Ok(out)
+    }
+
+    /// A session's evaluative queries in query order, each with the step and action it asked
+    /// about and its answer as first given (like `replay_answers`), if it has one: a session on
+    /// a remote env, resumed from a checkpoint, catches up on those stored after it.
+    pub async fn stored_moments(&self, session_id: &str) -> Result<Vec<StoredMoment>> {
+        let rows = sqlx::query(
+            "SELECT q.seq, q.step, json_extract(q.data, '$.action') AS action,
+                    COALESCE((SELECT r.value FROM answer_revisions r
+                              WHERE r.query_id = q.id AND r.revision = 0), a.value) AS value
+             FROM queries q LEFT JOIN answers a ON a.query_id = q.id
+             WHERE q.session_id = ? AND q.kind = 'evaluative' ORDER BY q.seq",
+        )
+        .bind(session_id)
+        .fetch_all(self.pool())
+        .await?;
+        Ok(rows
+            .iter()
+            .map(|r| StoredMoment {
+                seq: r.get::<i64, _>("seq") as u64,
+                step: r.get::<i64, _>("step") as u64,
+                action: r
+                    .get::<Option<String>, _>("action")
+                    .and_then(|a| serde_json::from_str(&a).ok()),
+                value: r.get::<Option<String>, _>("value").map(|v| parse_value(&v)),
+            })
+            .collect())
     }
 
     /// Every answered query of a session, in the order asked.
