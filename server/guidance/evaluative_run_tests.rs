@@ -1,6 +1,7 @@
 //! Tests of `evaluative_run`: what is asked, episodes, seeds, relabelling.
 
 use super::*;
+use crate::scene_graph::SceneGraph;
 
 /// Answers +1 when the action's first component is positive; counts the questions.
 struct Scripted {

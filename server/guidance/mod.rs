@@ -12,6 +12,7 @@
 //!   skip and "about equal" thresholds), shared by both synthetic oracles.
 //! - `human_pace`: at most N queries a minute, for people (the query rule still picks which).
 //! - `agreement`: how much trainers agree (Krippendorff's alpha, Fleiss' kappa).
+//! - `evaluative_config`: what defines a run (task, method, constants; its `config.json`).
 //! - `evaluative_run`: one SAC / EF-p% / DREF run, step by step, and policy evaluation; its
 //!   `run_checkpoint` saves a whole run between episodes so a long one resumes bit for bit.
 //! - `drpl`: what to ask: DRPL's scene-graph segments and pairs, its baselines, the belief over
@@ -22,6 +23,7 @@ pub mod agreement;
 pub mod ask_budget;
 pub mod ask_pacing;
 pub mod drpl;
+pub mod evaluative_config;
 pub mod evaluative_run;
 pub mod evaluative_trainer;
 pub mod expert_oracle;

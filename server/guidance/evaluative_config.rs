@@ -1,0 +1,282 @@
+//! What defines an evaluative run (`EvaluativeRunConfig`): the task, the method, the learner's
+//! and the query rule's constants, the trainer and the env's behaviours at an episode's end.
+//! Plain data, serialised as every run's `config.json` and into checkpoints; the run itself is
+//! `evaluative_run.rs`.
+
+use serde::{Deserialize, Serialize};
+
+use super::expert_oracle::OracleConfig;
+use super::feedback_schedule::EvaluativeMethod;
+use super::human_pace::HumanPace;
+use super::query_rule::{QueryRule, UcbForm};
+use super::teacher::TeacherFaults;
+use crate::rl::{HumanCriticConfig, SacConfig};
+use crate::scene_graph::SceneGraph;
+use crate::sim::{DeclaredTask, Env, EnvOptions, Task, TaskRef};
+
+/// DREF's query-rule constants (algorithms.md section 2, from the authors' configs), and the
+/// product rule's two changes (`docs/dref.md`), both off in the authors' rule.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct QueryRuleConfig {
+    pub c: f64,
+    pub k: usize,
+    pub form: UcbForm,
+    /// Rank among the states visited in the last `rank_window` steps; 0: among every state
+    /// that has had feedback (the authors'). Configs written before it existed read as 0.
+    #[serde(default)]
+    pub rank_window: usize,
+    /// A ceiling on the share of steps asked; `None`: none (the authors').
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ceiling: Option<FeedbackCeiling>,
+    /// After this many steps without a query, rank among the states visited during the
+    /// silence until the rule asks; 0: never (the authors'). Configs written before it existed
+    /// read as 0.
+    #[serde(default)]
+    pub wake_after: u64,
+}
+
+/// At most `rate` of the steps asked in the long run, at most about `burst` in a row; with a
+/// `floor`, the rate runs between it and `rate` by the share of recent "bad" answers.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FeedbackCeiling {
+    pub rate: f64,
+    pub burst: u32,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub floor: Option<f64>,
+}
+
+/// The product DREF's window: about 1,000 steps is many Placing and Reaching episodes and one or
+/// two of Lunar Lander's, so the ranked states are those of the learner's current behaviour
+/// (docs/dref.md).
+pub const DEFAULT_RANK_WINDOW: usize = 1_000;
+/// The product DREF's ceiling: 10 % of the steps (the paper's DREF asked 1.6-8.4 %), at most
+/// 20 queries in a row (one second of a human session at 20 Hz). At 5 % the masked critic had
+/// too few answers: Reaching stalled on 4 seeds of 10 and Placing failed on seeds a 10 % ceiling
+/// learns (docs/dref.md, docs/results/dref-ablation/).
+pub const DEFAULT_CEILING: FeedbackCeiling = FeedbackCeiling {
+    rate: 0.1,
+    burst: 20,
+    floor: None,
+};
+
+impl QueryRuleConfig {
+    /// The authors' rule on `task` (algorithms.md section 2).
+    pub fn for_task(task: Task) -> Self {
+        let (c, k) = match task {
+            Task::LunarLander => (0.2, 60),
+            Task::Reaching => (0.1, 2),
+            Task::Placing => (0.2, 4),
+        };
+        Self {
+            c,
+            k,
+            form: UcbForm::Authors,
+            rank_window: 0,
+            ceiling: None,
+            wake_after: 0,
+        }
+    }
+
+    /// The rule `method` asks by on `task`: the product's for `dref`, the authors' otherwise.
+    pub fn for_method(task: Task, method: EvaluativeMethod) -> Self {
+        let authors = Self::for_task(task);
+        match method {
+            EvaluativeMethod::Dref => Self {
+                rank_window: DEFAULT_RANK_WINDOW,
+                ceiling: Some(DEFAULT_CEILING),
+                ..authors
+            },
+            _ => authors,
+        }
+    }
+
+    /// The running rule these constants describe.
+    pub fn build(&self) -> QueryRule {
+        let mut rule = QueryRule::new(self.c, self.k, self.form);
+        if self.rank_window > 0 {
+            rule = rule.ranked_among_recent(self.rank_window);
+        }
+        if let Some(ceiling) = self.ceiling {
+            rule = rule.with_ceiling(ceiling.rate, ceiling.burst, ceiling.floor);
+        }
+        if self.wake_after > 0 {
+            rule = rule.waking_after(self.wake_after);
+        }
+        rule
+    }
+
+    /// A task an env declared: Placing's constants (c 0.2, k 4), the authors' largest c with a
+    /// k for a graph of a handful of predicates; set `c` and `k` for another.
+    pub fn for_declared() -> Self {
+        Self::for_task(Task::Placing)
+    }
+}
+
+/// Everything that defines a run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EvaluativeRunConfig {
+    pub task: TaskRef,
+    pub method: EvaluativeMethod,
+    pub seed: u64,
+    pub sac: SacConfig,
+    pub query_rule: QueryRuleConfig,
+    pub scene_graph: SceneGraph,
+    /// Which version of the task (tasks.md); configs written before it existed read as the
+    /// default.
+    #[serde(default)]
+    pub env: EnvOptions,
+    /// The learner stores `reward_scale * r` (the authors ran Reaching's SAC baseline at reward
+    /// 10, i.e. 0.1); episode returns and the cumulative reward stay on the env's scale.
+    #[serde(default = "unit_scale")]
+    pub reward_scale: f32,
+    /// At most N queries a minute (people); `None`: the method asks as it likes (the paper).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub human_pace: Option<HumanPace>,
+    /// The synthetic teacher's faults (none: the paper's oracle).
+    #[serde(default, skip_serializing_if = "TeacherFaults::is_perfect")]
+    pub teacher: TeacherFaults,
+    /// The synthetic oracle's alpha start and the scale of the actions its critic is shown
+    /// (the authors' head: 0.999 and 1).
+    #[serde(default, skip_serializing_if = "OracleConfig::is_default")]
+    pub oracle: OracleConfig,
+    /// Which observation the scene graph reads on an episode's last step.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub graph_at_episode_end: GraphAtEpisodeEnd,
+    /// How a time limit's end is stored for the learner.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub time_limit: TimeLimitEnd,
+}
+
+fn is_default<T: Default + PartialEq>(value: &T) -> bool {
+    *value == T::default()
+}
+
+/// The observation the scene graph reads on an episode's last step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum GraphAtEpisodeEnd {
+    /// The episode's last observation s_{t+1} (the graph of what the robot did).
+    #[default]
+    Step,
+    /// The next episode's first observation, as the authors' runs had it: stable-baselines3's
+    /// vectorised env resets before it returns, so their `new_obs` at an episode's end was the
+    /// reset observation, and the graph (and so the query rule) read that.
+    Reset,
+}
+
+/// How an episode's end at the time limit is stored for the learner.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum TimeLimitEnd {
+    /// As a truncation: the bootstrap goes on through it (algorithms.md section 1).
+    #[default]
+    Truncation,
+    /// As a termination, as the authors' robosuite runs stored it (their wrapper set `done`
+    /// at the horizon and no `TimeLimit.truncated`), so the bootstrap stops there.
+    Terminal,
+}
+
+fn unit_scale() -> f32 {
+    1.0
+}
+
+/// The human critic `method` learns with: none for plain SAC; the authors' (H regressed on every
+/// sampled step, the unasked ones as 0) for EF and the authors' DREF; regressed on answered
+/// steps only for the product's DREF, whose answers would otherwise be outnumbered by zeros
+/// 30 to 1 at a few percent of feedback (docs/dref.md).
+fn human_critic_for(method: EvaluativeMethod) -> Option<HumanCriticConfig> {
+    match method {
+        EvaluativeMethod::Sac => None,
+        EvaluativeMethod::Dref => Some(HumanCriticConfig {
+            mask: true,
+            ..HumanCriticConfig::default()
+        }),
+        EvaluativeMethod::Ef { .. } | EvaluativeMethod::DrefAuthors => {
+            Some(HumanCriticConfig::default())
+        }
+    }
+}
+
+impl EvaluativeRunConfig {
+    /// The published defaults for `task` and `method`: plain SAC has no human critic, EF and
+    /// DREF have one with the authors' actor mix; the product's `dref` regresses it on answered
+    /// steps only and asks by its own rule (`docs/dref.md`).
+    pub fn new(task: Task, method: EvaluativeMethod, seed: u64) -> Self {
+        let mut sac = SacConfig::for_task(task);
+        sac.human_critic = human_critic_for(method);
+        Self {
+            task: task.into(),
+            method,
+            seed,
+            sac,
+            query_rule: QueryRuleConfig::for_method(task, method),
+            scene_graph: SceneGraph::for_task(task),
+            env: EnvOptions::default(),
+            reward_scale: 1.0,
+            human_pace: None,
+            teacher: TeacherFaults::default(),
+            oracle: OracleConfig::default(),
+            graph_at_episode_end: GraphAtEpisodeEnd::Step,
+            time_limit: TimeLimitEnd::Truncation,
+        }
+    }
+
+    /// The defaults for a task an env in another process declared, with its `graph`:
+    /// stable-baselines3's SAC (two layers of 256, learning rate 3e-4, batch 256, tau 0.005)
+    /// and [`QueryRuleConfig::for_declared`].
+    pub fn declared(
+        task: DeclaredTask,
+        graph: SceneGraph,
+        method: EvaluativeMethod,
+        seed: u64,
+    ) -> Self {
+        let sac = SacConfig {
+            hidden: vec![256, 256],
+            learning_rate: 3e-4,
+            batch_size: 256,
+            buffer_size: 1_000_000,
+            tau: 0.005,
+            gamma: 0.99,
+            learning_starts: 0,
+            gradient_steps: 1,
+            init_ent_coef: 1.0,
+            target_entropy: None,
+            human_critic: human_critic_for(method),
+        };
+        let query_rule = match method {
+            EvaluativeMethod::Dref => QueryRuleConfig {
+                rank_window: DEFAULT_RANK_WINDOW,
+                ceiling: Some(DEFAULT_CEILING),
+                ..QueryRuleConfig::for_declared()
+            },
+            _ => QueryRuleConfig::for_declared(),
+        };
+        Self {
+            task: TaskRef::Declared(task),
+            method,
+            seed,
+            sac,
+            query_rule,
+            scene_graph: graph,
+            env: EnvOptions::default(),
+            reward_scale: 1.0,
+            human_pace: None,
+            teacher: TeacherFaults::default(),
+            oracle: OracleConfig::default(),
+            graph_at_episode_end: GraphAtEpisodeEnd::Step,
+            time_limit: TimeLimitEnd::Truncation,
+        }
+    }
+
+    /// Build the run's env on our simulator. Panics for a declared task, whose env lives in
+    /// another process: build that run with [`EvaluativeRun::with_env`].
+    pub fn make_env(&self) -> Box<dyn Env> {
+        match &self.task {
+            TaskRef::Builtin(task) => task.make_env_with(&self.env),
+            TaskRef::Declared(d) => panic!(
+                "task {} lives in another process: give its env to EvaluativeRun::with_env",
+                d.env
+            ),
+        }
+    }
+}
