@@ -15,6 +15,26 @@ use serde_json::{Value, json};
 /// The env answers this many steps, then closes the connection on the next.
 const DIES_AT_STEP: u64 = 157;
 
+/// The hello of a one-dimensional env of its own task: act right (a > 0) to hold "right".
+fn line_hello(id: &str, max_episode_steps: u32) -> Value {
+    json!({"type": "hello", "protocol": 1, "env": {
+        "id": id,
+        "observation_space": {"shape": [2], "low": [-1, -1], "high": [1, 1]},
+        "action_space": {"shape": [1], "low": [-1], "high": [1]},
+        "control_hz": 10,
+        "max_episode_steps": max_episode_steps,
+        "predicates": [{"name": "right", "label": "point right"}],
+        "deterministic": true
+    }})
+}
+
+/// That env's answer to a step: the action becomes the observation.
+fn line_step(request: &Value) -> Value {
+    let a = request["action"][0].as_f64().unwrap();
+    json!({"type": "step", "obs": [a, 0.0], "reward": -a.abs(), "terminated": false,
+           "truncated": false, "holding": if a > 0.0 { json!(["right"]) } else { json!([]) }})
+}
+
 fn read(s: &mut TcpStream) -> Option<Value> {
     let mut len = [0u8; 4];
     s.read_exact(&mut len).ok()?;
@@ -40,22 +60,12 @@ fn dying_env() -> String {
         let mut steps = 0u64;
         while let Some(request) = read(&mut s) {
             let reply = match request["type"].as_str().unwrap() {
-                "hello" => json!({"type": "hello", "protocol": 1, "env": {
-                    "id": "dying-line",
-                    "observation_space": {"shape": [2], "low": [-1, -1], "high": [1, 1]},
-                    "action_space": {"shape": [1], "low": [-1], "high": [1]},
-                    "control_hz": 10,
-                    "max_episode_steps": 50,
-                    "predicates": [{"name": "right", "label": "point right"}],
-                    "deterministic": true
-                }}),
+                "hello" => line_hello("dying-line", 50),
                 "reset" => json!({"type": "reset", "obs": [0.0, 0.0]}),
                 "step" if steps == DIES_AT_STEP => return,
                 "step" => {
                     steps += 1;
-                    let a = request["action"][0].as_f64().unwrap();
-                    json!({"type": "step", "obs": [a, 0.0], "reward": -a.abs(), "terminated": false,
-                           "truncated": false, "holding": if a > 0.0 { json!(["right"]) } else { json!([]) }})
+                    line_step(&request)
                 }
                 _ => return,
             };
@@ -83,22 +93,9 @@ fn line_env(repeats: bool) -> String {
             std::thread::spawn(move || {
                 while let Some(request) = read(&mut s) {
                     let reply = match request["type"].as_str().unwrap() {
-                        "hello" => json!({"type": "hello", "protocol": 1, "env": {
-                            "id": "line",
-                            "observation_space": {"shape": [2], "low": [-1, -1], "high": [1, 1]},
-                            "action_space": {"shape": [1], "low": [-1], "high": [1]},
-                            "control_hz": 10,
-                            "max_episode_steps": 20,
-                            "predicates": [{"name": "right", "label": "point right"}],
-                            "deterministic": true
-                        }}),
+                        "hello" => line_hello("line", 20),
                         "reset" => json!({"type": "reset", "obs": [start, 0.0]}),
-                        "step" => {
-                            let a = request["action"][0].as_f64().unwrap();
-                            json!({"type": "step", "obs": [a, 0.0], "reward": -a.abs(),
-                                   "terminated": false, "truncated": false,
-                                   "holding": if a > 0.0 { json!(["right"]) } else { json!([]) }})
-                        }
+                        "step" => line_step(&request),
                         "close" => {
                             write(&mut s, &json!({"type": "close"}));
                             return;
