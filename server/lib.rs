@@ -7,21 +7,19 @@
 //!
 //! ## Layout
 //!
-//! Algorithm modules do no IO (no tokio, axum, sqlx or rerun), so they run headless in tests,
-//! benchmarks and the CLI:
+//! The algorithms live in the crate `dualrep-core` (`core/`), which does no IO and cannot: no
+//! tokio, axum, sqlx or rerun in its dependency tree. They are re-exported here under their
+//! own names, so `dualrep::rl` is `dualrep_core::rl`:
 //!
-//! - [`sim`]: the `Env` trait and the three tasks on rapier: Reaching and Placing (rapier3d),
-//!   Lunar Lander (rapier2d, Gymnasium's semantics); heuristic controllers; rollouts.
-//! - [`scene_graph`]: each task's predicates, evaluated on `(s_{t+1}, a_t)` into an
-//!   `AbstractState` bit vector.
-//! - [`rl`]: MLPs on nalgebra with a hand-written backward pass, Adam, losses, the
-//!   tanh-squashed Gaussian policy, the replay buffer, and SAC with DREF's twin human critic
-//!   (checkpoints as safetensors bytes). `rl::kernels` computes every layer's products: on the
-//!   portable path (matrixmultiply) or on the AVX-512 / AVX2 kernels of the `dualrep-kernels`
-//!   crate (`kernels/`), chosen at run time, on one or more threads.
-//! - [`guidance`]: when to ask (DREF's UCB query rule, EF-p%, a person's pace), who answers
-//!   (the `EvaluativeTrainer` trait, the expert oracle, simulated teachers' faults), the
-//!   evaluative training loop, what to ask (DRPL), and how much trainers agree.
+//! - [`sim`]: the `Env` trait and the three tasks on rapier; heuristic controllers; rollouts.
+//! - [`scene_graph`]: each task's predicates into an `AbstractState` bit vector.
+//! - [`rl`]: MLPs with a hand-written backward pass, Adam, SAC with DREF's twin human critic,
+//!   on the portable or the AVX-512 / AVX2 kernels (`kernels/`).
+//! - [`guidance`]: when to ask (DREF), who answers, the evaluative training loop, what to ask
+//!   (DRPL), and how much trainers agree.
+//!
+//! The service's own modules that do no IO either:
+//!
 //! - [`settings`]: every setting by name (`Settings`: flat keys to users, one section per
 //!   family inside, the key list read from the sections), read by launch requests, `--set`/TOML,
 //!   `GET /api/tasks` and the dashboard.
@@ -60,10 +58,11 @@
 //! - [`cli`]: the `dualrep` command line: `serve`, `sim`, `train`, `prefs`, `expert`,
 //!   `reproduce`, `export`, `bench`, `loadtest`.
 
+pub use dualrep_core::{guidance, rl, scene_graph, sim};
+
 pub mod api;
 pub mod cli;
 pub mod export;
-pub mod guidance;
 pub mod http;
 pub mod hub;
 pub mod json_input;
@@ -71,12 +70,9 @@ pub mod protocol;
 pub mod record;
 pub mod remote_env;
 pub mod report;
-pub mod rl;
-pub mod scene_graph;
 pub mod server;
 pub mod session;
 pub mod settings;
 pub mod shipped;
-pub mod sim;
 pub mod store;
 pub mod ws;

@@ -1,25 +1,18 @@
-//! Every integration test in one binary. Each test binary links the whole Rerun SDK (hundreds
-//! of megabytes and most of a test build's link time), so the suite links it once. The
-//! no-allocation tests share the binary: the counting allocator below keeps its counters per
-//! thread, so the tests running beside them do not disturb their counts (one that must count
-//! helper threads too re-runs this binary for itself alone: `sac_no_alloc.rs`).
+//! Every integration test of the service in one binary. Each test binary links the whole Rerun
+//! SDK (hundreds of megabytes and most of a test build's link time), so the suite links it once.
+//! The algorithms' own tests (tasks, networks, SAC, no-allocation counts) are the core crate's,
+//! in `core/tests/`, and link nothing of the service.
 //!
 //! Select a group by its module name: `cargo test --test suite browser::`.
 
 mod report_fixtures;
 mod support;
 
-#[global_allocator]
-static GLOBAL: support::counting_alloc::Counting = support::counting_alloc::Counting;
-
-mod belief_no_alloc;
 mod browser;
 mod cli;
 mod datasets;
 mod durability;
-mod env_contract;
 mod http_api;
-mod lunar_lander;
 mod module_graph;
 mod prefs_e2e;
 mod recording;
@@ -27,14 +20,10 @@ mod remote_env_failures;
 mod remote_envs;
 mod report;
 mod reproduce;
-mod rl_gradients;
-mod rl_no_alloc;
-mod sac;
-mod sac_no_alloc;
+mod sac_settings;
 mod security_headers;
 mod session_recording;
 mod slurm;
 mod store;
-mod tabletop;
 mod train_e2e;
 mod ws_sessions;

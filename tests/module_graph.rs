@@ -1,11 +1,12 @@
-//! The top-level modules of `server/` depend on each other one way only. A cycle (`http` mounts
-//! `ws` while `ws` takes `http`'s state, say) means neither module can be read, tested or
-//! moved without the other, so this test reads every `crate::<module>` path in the sources,
-//! test modules included, and fails with the modules and the lines that close each cycle.
+//! The top-level modules of `server/` and of `core/src/` depend on each other one way only,
+//! and the core crate's dependency tree holds no runtime, server, database or recorder.
 //!
-//! It reads the source text, not the compiler's view: a path written inside a string or after
-//! code on the same line as a `//` comment counts, and `super::` chains that climb out of a
-//! module do not (none do).
+//! A cycle (`http` mounts `ws` while `ws` takes `http`'s state, say) means neither module can be
+//! read, tested or moved without the other, so this test reads every `crate::<module>` path in
+//! the sources, test modules included, and fails with the modules and the lines that close each
+//! cycle. It reads the source text, not the compiler's view: a path written inside a string or
+//! after code on the same line as a `//` comment counts, and `super::` chains that climb out of
+//! a module do not (none do).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fs;
@@ -14,12 +15,12 @@ use std::path::{Path, PathBuf};
 /// Where a module names another: the first file and line that does, for the failure message.
 type Edges = BTreeMap<String, BTreeMap<String, String>>;
 
-/// The crate's top-level modules: each `.rs` file and each folder directly in `server/`, but
-/// the crate roots themselves.
+/// A crate's top-level modules: each `.rs` file and each folder directly in its source folder,
+/// but the crate roots themselves.
 fn top_level_modules(root: &Path) -> BTreeSet<String> {
     fs::read_dir(root)
-        .expect("server/ reads")
-        .map(|entry| entry.expect("an entry of server/").path())
+        .expect("the source folder reads")
+        .map(|entry| entry.expect("an entry of the source folder").path())
         .filter(|path| path.is_dir() || path.extension().is_some_and(|e| e == "rs"))
         .map(|path| path.file_stem().unwrap().to_string_lossy().into_owned())
         .filter(|name| name != "lib" && name != "main")
@@ -27,7 +28,7 @@ fn top_level_modules(root: &Path) -> BTreeSet<String> {
 }
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for entry in fs::read_dir(dir).expect("a folder of server/ reads") {
+    for entry in fs::read_dir(dir).expect("a source folder reads") {
         let path = entry.expect("an entry").path();
         if path.is_dir() {
             rust_files(&path, out);
@@ -111,7 +112,7 @@ fn module_graph(root: &Path) -> Edges {
             }
             for to in named_modules(rest) {
                 if to != from && modules.contains(&to) {
-                    let place = format!("server/{}:{}", relative.display(), number + 1);
+                    let place = format!("{}:{}", file.display(), number + 1);
                     edges
                         .entry(from.clone())
                         .or_default()
@@ -197,8 +198,19 @@ fn mutual_pairs<'a>(edges: &'a Edges, group: &'a BTreeSet<String>) -> Vec<(&'a s
 
 #[test]
 fn top_level_modules_depend_on_each_other_one_way() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("server");
-    let edges = module_graph(&root);
+    // The service's modules, and the core crate's (sim, scene_graph, rl, guidance).
+    for root in ["server", "core/src"] {
+        assert_no_cycles(&Path::new(env!("CARGO_MANIFEST_DIR")).join(root));
+    }
+}
+
+fn assert_no_cycles(root: &Path) {
+    let edges = module_graph(root);
+    assert!(
+        !edges.is_empty(),
+        "{} has modules that name each other",
+        root.display()
+    );
     let found = cycles(&edges);
     let mut report = String::new();
     for group in &found {
@@ -229,5 +241,52 @@ fn reads_paths_and_groups() {
     assert_eq!(
         named_modules("let x = 1;\nuse crate::ws;"),
         Vec::<String>::new()
+    );
+}
+
+/// The rule "algorithms do no IO" is the compiler's: the core crate cannot name tokio, axum,
+/// sqlx or rerun because none of them is in its dependency tree (normal dependencies, its own
+/// features only, as `cargo test -p dualrep-core` builds it).
+#[test]
+fn the_core_crate_depends_on_no_runtime_server_database_or_recorder() {
+    let out = std::process::Command::new(env!("CARGO"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args([
+            "tree",
+            "--offline",
+            "-p",
+            "dualrep-core",
+            "-e",
+            "normal",
+            "--prefix",
+            "none",
+        ])
+        .output()
+        .expect("cargo tree runs");
+    assert!(
+        out.status.success(),
+        "cargo tree: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let tree = String::from_utf8(out.stdout).unwrap();
+    let packages: BTreeSet<&str> = tree.lines().filter_map(|l| l.split(' ').next()).collect();
+    assert!(
+        packages.contains("dualrep-core") && packages.contains("rapier3d"),
+        "{tree}"
+    );
+    // Each name and its family (`sqlx-core`, `rerun-sdk`, ...); and the service crate itself.
+    let families = ["tokio", "axum", "sqlx", "rerun", "hyper", "tower", "utoipa"];
+    let found: Vec<&&str> = packages
+        .iter()
+        .filter(|p| {
+            **p == "dualrep"
+                || families
+                    .iter()
+                    .any(|f| p == &f || p.starts_with(&format!("{f}-")))
+        })
+        .collect();
+    assert!(
+        found.is_empty(),
+        "the core crate's tree holds {found:?}:\n{tree}"
     );
 }

@@ -1,4 +1,4 @@
-"""Reference values for `tests/rl_gradients.rs`, computed with PyTorch.
+"""Reference values for `core/tests/rl_gradients.rs`, computed with PyTorch.
 
 Builds the MLP of the test (6 -> 8 -> 7 -> 6, ReLU between, linear output) with parameters from
 a formula written identically in Rust, runs forward, MSE loss, backward and two Adam steps, and

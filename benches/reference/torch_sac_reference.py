@@ -1,4 +1,4 @@
-"""Reference values for `server/rl/sac/tests/torch_reference.rs`, computed with PyTorch.
+"""Reference values for `core/src/rl/sac/tests/torch_reference.rs`, computed with PyTorch.
 
 Two full SAC updates in stable-baselines3's order (`SAC.train`, which the authors' DREF fork
 uses) on tiny networks with fixed weights, a fixed batch and fixed policy noise, for three

@@ -2,7 +2,6 @@
 
 pub mod binary;
 pub mod cli;
-pub mod counting_alloc;
 pub mod py_venv;
 pub mod pyarrow_py;
 pub mod python_client;

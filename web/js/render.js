@@ -1,5 +1,5 @@
 // Canvas drawing of the three tasks from the server's `Geometry` and `RenderState`
-// (server/sim/env.rs): Reaching from above; Placing from above and from the side; Lunar Lander
+// (core/src/sim/env.rs): Reaching from above; Placing from above and from the side; Lunar Lander
 // from the side with terrain, flags, legs and engine flames. Plus the action as an arrow and a
 // faded trail of the clip so far.
 

@@ -152,7 +152,8 @@ fn is_default<T: Default + PartialEq>(value: &T) -> bool {
 }
 
 /// The observation the scene graph reads on an episode's last step.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(utoipa::ToSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum GraphAtEpisodeEnd {
     /// The episode's last observation s_{t+1} (the graph of what the robot did).
@@ -165,7 +166,8 @@ pub enum GraphAtEpisodeEnd {
 }
 
 /// How an episode's end at the time limit is stored for the learner.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(utoipa::ToSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum TimeLimitEnd {
     /// As a truncation: the bootstrap goes on through it (algorithms.md section 1).

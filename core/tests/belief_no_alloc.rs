@@ -4,7 +4,7 @@
 use crate::support::counting_alloc;
 
 use counting_alloc::count;
-use dualrep::guidance::drpl::belief::{Belief, BeliefConfig, Response};
+use dualrep_core::guidance::drpl::belief::{Belief, BeliefConfig, Response};
 
 #[test]
 fn a_belief_update_allocates_nothing() {

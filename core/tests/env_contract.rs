@@ -1,8 +1,8 @@
 //! The `Env` contract every task keeps, checked the same way for all three: sizes as data,
 //! clipping, determinism, episode ends, and a render state the browser can parse.
 
-use dualrep::scene_graph::SceneGraph;
-use dualrep::sim::{Env, Outcome, Task};
+use dualrep_core::scene_graph::SceneGraph;
+use dualrep_core::sim::{Env, Outcome, Task};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

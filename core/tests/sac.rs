@@ -1,11 +1,9 @@
-//! `dualrep::rl::sac` through its public API: configuration overrides, checkpoints, and that
+//! `dualrep_core::rl::sac` through its public API: configuration overrides, checkpoints, and that
 //! it learns.
 
-use dualrep::guidance::feedback_schedule::EvaluativeMethod;
-use dualrep::rl::replay::{ReplayBuffer, Transition};
-use dualrep::rl::sac::{ActorMix, HumanCriticConfig, Sac, SacConfig};
-use dualrep::settings::Settings;
-use dualrep::sim::Task;
+use dualrep_core::rl::replay::{ReplayBuffer, Transition};
+use dualrep_core::rl::sac::{ActorMix, HumanCriticConfig, Sac, SacConfig};
+use dualrep_core::sim::Task;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -54,85 +52,6 @@ fn per_task_table() {
         );
     }
 }
-
-/// A run's SAC settings by name, as `--set` and a launch's `params` give them.
-fn sac_with(pairs: &[(&str, &str)]) -> Result<SacConfig, String> {
-    Settings::from_pairs(pairs.iter().copied())?
-        .evaluative(Task::LunarLander, EvaluativeMethod::DrefAuthors, 0)
-        .map(|c| c.sac)
-}
-
-#[test]
-fn settings_override_every_sac_key() {
-    let c = sac_with(&[
-        ("hidden", "256,256"),
-        ("learning_rate", "3e-4"),
-        ("batch_size", "256"),
-        ("buffer_size", "1000"),
-        ("tau", "0.005"),
-        ("gamma", "0.98"),
-        ("learning_starts", "100"),
-        ("gradient_steps", "2"),
-        ("init_ent_coef", "0.1"),
-        ("target_entropy", "-3"),
-        ("lambda", "4"),
-        ("mix", "paper"),
-        ("human_critic_mask", "true"),
-    ])
-    .unwrap();
-    assert_eq!(c.hidden, [256, 256]);
-    assert_eq!(
-        (c.learning_rate, c.batch_size, c.buffer_size),
-        (3e-4, 256, 1000)
-    );
-    assert_eq!(
-        (c.tau, c.gamma, c.learning_starts, c.gradient_steps),
-        (0.005, 0.98, 100, 2)
-    );
-    assert_eq!((c.init_ent_coef, c.target_entropy), (0.1, Some(-3.0)));
-    assert_eq!(
-        c.human_critic,
-        Some(HumanCriticConfig {
-            lambda: 4.0,
-            mix: ActorMix::Paper,
-            mask: true
-        })
-    );
-    let c = sac_with(&[("target_entropy", "-3"), ("target_entropy", "auto")]).unwrap();
-    assert_eq!(c.target_entropy, None);
-    assert_eq!(
-        sac_with(&[("human_critic", "false")]).unwrap().human_critic,
-        None
-    );
-    assert_eq!(
-        sac_with(&[("human_critic", "true")]).unwrap().human_critic,
-        Some(HumanCriticConfig::default())
-    );
-}
-
-#[test]
-fn settings_reject_unknown_keys_and_bad_values_clearly() {
-    for (k, v, says) in [
-        ("hiden", "64", "unknown field `hiden`"),
-        ("hidden", "64,0", "positive layer sizes"),
-        ("hidden", "", "layer sizes"),
-        ("learning_rate", "fast", "invalid type"),
-        ("learning_rate", "-1", "positive number"),
-        ("batch_size", "0", "at least 1"),
-        ("batch_size", "1.5", "invalid type"),
-        ("tau", "2", "[0, 1]"),
-        ("gamma", "NaN", "invalid type"),
-        ("mix", "both", "unknown variant `both`"),
-        ("human_critic", "yes", "invalid type"),
-        ("human_critic_mask", "1", "invalid type"),
-        ("lambda", "-1", ">= 0"),
-    ] {
-        let err = sac_with(&[(k, v)]).expect_err(&format!("{k}={v} accepted"));
-        assert!(err.contains(says), "{k}={v}: {err:?} should say {says:?}");
-    }
-}
-
-// --- checkpoints ---------------------------------------------------------------------------
 
 fn random_replay(obs_dim: usize, act_dim: usize, n: usize, seed: u64) -> ReplayBuffer {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);

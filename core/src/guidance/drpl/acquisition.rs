@@ -6,7 +6,8 @@ use serde::{Deserialize, Serialize};
 
 use super::belief::{Belief, Response};
 
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(utoipa::ToSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum Acquisition {
     /// Uniformly among the candidates \[paper\].

@@ -8,10 +8,10 @@
 
 use std::process::Command;
 
-use dualrep::rl::kernels::{self, KernelPath};
-use dualrep::rl::replay::{ReplayBuffer, Transition};
-use dualrep::rl::sac::{HumanCriticConfig, Sac, SacConfig};
-use dualrep::sim::Task;
+use dualrep_core::rl::kernels::{self, KernelPath};
+use dualrep_core::rl::replay::{ReplayBuffer, Transition};
+use dualrep_core::rl::sac::{HumanCriticConfig, Sac, SacConfig};
+use dualrep_core::sim::Task;
 
 use crate::support::counting_alloc;
 

@@ -38,7 +38,7 @@
 //! loss reaches the actor through the frozen critic's input gradient:
 //!
 //! ```
-//! use dualrep::rl::{Adam, AdamConfig, Mlp, mse_loss};
+//! use dualrep_core::rl::{Adam, AdamConfig, Mlp, mse_loss};
 //! use rand::SeedableRng;
 //!
 //! let (obs_dim, act_dim, batch) = (8, 2, 32);

@@ -53,7 +53,8 @@ impl Default for HumanCriticConfig {
 }
 
 /// How the actor loss combines the environment critic Q and the human critic H.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(utoipa::ToSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum ActorMix {
     /// The authors' code (the published curves): head-wise

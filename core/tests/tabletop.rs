@@ -1,10 +1,10 @@
 //! Reaching and Placing through the public `Env` interface: heuristic and random success rates,
 //! the ball's fate, the safety gates, the horizon and determinism.
 
-use dualrep::sim::placing::{self, Placing};
-use dualrep::sim::reaching::{self, Reaching};
-use dualrep::sim::rollout::{SimplePolicy, run_episodes, run_episodes_with};
-use dualrep::sim::{
+use dualrep_core::sim::placing::{self, Placing};
+use dualrep_core::sim::reaching::{self, Reaching};
+use dualrep_core::sim::rollout::{SimplePolicy, run_episodes, run_episodes_with};
+use dualrep_core::sim::{
     Env, EnvOptions, Geometry, GripObservation, Outcome, PlacingSuccess, RenderState, Start, Step,
     Task, Variant,
 };

@@ -1,5 +1,5 @@
-//! A counting global allocator for the no-allocation tests, installed for the whole suite by
-//! `tests/main.rs`. Its counters are per thread, so a test counts only its own allocations, and
+//! A counting global allocator for the no-allocation tests, installed for the whole
+//! binary by `core/tests/main.rs`. Its counters are per thread, so a test counts only its own allocations, and
 //! also process-wide, for a test that runs alone in a process of its own and must see what
 //! helper threads allocate ([`count_all_threads`]).
 

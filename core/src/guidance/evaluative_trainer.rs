@@ -21,7 +21,8 @@ pub enum Evaluation {
 
 /// The mean of several +1 / 0 / -1 answers, strictly between -1 and 1 and not 0; compared by
 /// its bits, so it can be a map key and replays compare exactly.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(utoipa::ToSchema))]
 #[serde(try_from = "f32", into = "f32")]
 pub struct MeanLabel(f32);
 

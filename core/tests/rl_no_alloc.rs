@@ -7,8 +7,8 @@
 //! allocation allowed: exactly one per product, and nothing still live after. The fast paths
 //! pack into per-thread scratch that the first update grows: after it, nothing at all.
 
-use dualrep::rl::kernels::{self, KernelPath};
-use dualrep::rl::{Adam, AdamConfig, Mlp, MlpWorkspace, mse_loss};
+use dualrep_core::rl::kernels::{self, KernelPath};
+use dualrep_core::rl::{Adam, AdamConfig, Mlp, MlpWorkspace, mse_loss};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 

@@ -1,10 +1,10 @@
 //! The MLP's gradients, proven two ways: central finite differences of the same network evaluated
 //! in f64, and PyTorch's numbers for a fixed network. Plus a tiny end-to-end fit as a regression guard.
 
-// Inside `mod rl` so that `cargo test rl` selects these tests with the unit tests of `dualrep::rl`.
+// Inside `mod rl` so that `cargo test rl` selects these tests with the unit tests of `dualrep_core::rl`.
 mod rl {
-    use dualrep::rl::kernels;
-    use dualrep::rl::{Adam, AdamConfig, Mlp, MlpWorkspace, mse_loss};
+    use dualrep_core::rl::kernels;
+    use dualrep_core::rl::{Adam, AdamConfig, Mlp, MlpWorkspace, mse_loss};
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 

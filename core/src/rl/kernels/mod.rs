@@ -44,12 +44,15 @@ use std::sync::atomic::{AtomicU8, AtomicUsize, Ordering};
 
 use serde::{Deserialize, Serialize};
 
-pub(crate) use dense::{DenseLayer, forward_layer, input_grad, input_grad_columns, weight_grad};
+// Public for `dualrep bench kernels`, which times each product on each path.
+pub(crate) use dense::input_grad_columns;
+pub use dense::{DenseLayer, forward_layer, input_grad, weight_grad};
 pub use dualrep_kernels::Isa;
 pub use side_by_side::side_by_side;
 
 /// Which kernels compute the networks' products.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(utoipa::ToSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum KernelPath {
     /// matrixmultiply's `sgemm`: the same bits on every machine, and as every earlier run.

@@ -25,7 +25,8 @@ use super::ask_budget::AskBudget;
 use super::recent_visits::RecentVisits;
 use crate::scene_graph::AbstractState;
 
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(utoipa::ToSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum UcbForm {
     /// `mean |H - H_hat| + c sqrt(2 N / (N(g) + 1))`, as in the authors' code.

@@ -10,13 +10,13 @@ use crate::rl::linear::Linear;
 
 /// A layer and the parameter vector it lives in.
 #[derive(Clone, Copy)]
-pub(crate) struct DenseLayer<'a> {
+pub struct DenseLayer<'a> {
     pub layer: &'a Linear,
     pub params: &'a [f32],
 }
 
 /// `z = W x + b`, then ReLU if `relu`.
-pub(crate) fn forward_layer(d: DenseLayer<'_>, x: &DMatrix<f32>, z: &mut DMatrix<f32>, relu: bool) {
+pub fn forward_layer(d: DenseLayer<'_>, x: &DMatrix<f32>, z: &mut DMatrix<f32>, relu: bool) {
     let DenseLayer { layer, params } = d;
     assert_eq!(x.nrows(), layer.n_in, "layer input");
     assert_eq!(z.shape(), (layer.n_out, x.ncols()), "layer output");
@@ -37,7 +37,7 @@ pub(crate) fn forward_layer(d: DenseLayer<'_>, x: &DMatrix<f32>, z: &mut DMatrix
 
 /// `dW^T += x dz^T` and `db += ` the sum of `dz` over the batch, into the gradient vector
 /// `grads` (laid out like the parameters).
-pub(crate) fn weight_grad(layer: &Linear, grads: &mut [f32], x: &DMatrix<f32>, dz: &DMatrix<f32>) {
+pub fn weight_grad(layer: &Linear, grads: &mut [f32], x: &DMatrix<f32>, dz: &DMatrix<f32>) {
     assert_eq!(x.nrows(), layer.n_in, "layer input");
     assert_eq!(
         dz.shape(),
@@ -65,7 +65,7 @@ pub(crate) fn weight_grad(layer: &Linear, grads: &mut [f32], x: &DMatrix<f32>, d
 
 /// `dx = W^T dz`, then zero where `h <= 0` if `h` (the ReLU output that was this layer's input)
 /// is given.
-pub(crate) fn input_grad(
+pub fn input_grad(
     d: DenseLayer<'_>,
     dz: &DMatrix<f32>,
     dx: &mut DMatrix<f32>,

@@ -12,7 +12,8 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 /// The start pose, speed and gripper of Reaching and Placing.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(utoipa::ToSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum Variant {
     /// The authors' tasks: the robot's home pose with 5 % reset noise, 1.2 cm per step, and
@@ -25,7 +26,8 @@ pub enum Variant {
 }
 
 /// Where an episode of Reaching or Placing starts, before its reset moves.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(utoipa::ToSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum Start {
     /// \[authors\] The robot's home pose.
@@ -36,7 +38,8 @@ pub enum Start {
 }
 
 /// When a released ball counts as placed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(utoipa::ToSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum PlacingSuccess {
     /// \[authors\] Released while its centre is over the opening and above the ring: success at
@@ -48,7 +51,8 @@ pub enum PlacingSuccess {
 }
 
 /// What Placing's fourth observation `g` holds.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(utoipa::ToSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum GripObservation {
     /// \[authors\] The sign of the last gripper command: -1 if it was "open", else +1.

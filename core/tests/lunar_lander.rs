@@ -1,8 +1,8 @@
 //! LunarLander on rapier2d against Gymnasium's `LunarLanderContinuous-v3` semantics.
 
-use dualrep::sim::lunar_lander::{LunarLander, heuristic};
-use dualrep::sim::rollout::{SimplePolicy, run_episodes};
-use dualrep::sim::{Env, Geometry, Outcome, RenderState, Task};
+use dualrep_core::sim::lunar_lander::{LunarLander, heuristic};
+use dualrep_core::sim::rollout::{SimplePolicy, run_episodes};
+use dualrep_core::sim::{Env, Geometry, Outcome, RenderState, Task};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

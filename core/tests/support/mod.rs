@@ -1,0 +1,3 @@
+//! Helpers shared by the core crate's integration tests.
+
+pub mod counting_alloc;
