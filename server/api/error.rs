@@ -108,7 +108,8 @@ impl From<HubError> for ApiError {
         match e {
             HubError::NotFound(id) => ApiError::NotFound(format!("no session {id}")),
             HubError::Conflict(m) => ApiError::Conflict(m),
-            HubError::Invalid(m) => ApiError::InvalidSession(m),
+            HubError::Invalid(e) => ApiError::InvalidSession(e.to_string()),
+            HubError::StoredSpec(e) => ApiError::InvalidSession(e.to_string()),
             HubError::Store(e) => e.into(),
         }
     }

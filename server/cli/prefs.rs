@@ -148,9 +148,9 @@ pub fn resolve_config(
                 d.spec.max_episode_steps as usize,
             ))
         }
-        (None, None) => Err("give --task, --env-url, or both".into()),
+        (None, None) => anyhow::bail!("give --task, --env-url, or both"),
     };
-    let mut config = config.map_err(anyhow::Error::msg)?;
+    let mut config = config?;
     if let Some(n) = args.trajectories {
         config.trajectories = usize::try_from(n)?;
     }

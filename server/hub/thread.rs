@@ -91,7 +91,7 @@ impl Owner {
                         Ok(r) => {
                             plan = match plan.on_remote(&r.description) {
                                 Ok(plan) => plan,
-                                Err(e) => return failed(e.0),
+                                Err(e) => return failed(e.to_string()),
                             };
                             let from_checkpoint =
                                 r.resume_from.is_some() && !plan.spec.method.is_preference();
@@ -102,7 +102,7 @@ impl Owner {
                             }
                             ctx.remote = Some(r);
                         }
-                        Err(reason) => return failed(reason),
+                        Err(e) => return failed(e.to_string()),
                     }
                 }
                 // Opening the file (and a viewer connection) is blocking IO: here, not on the

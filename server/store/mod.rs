@@ -45,7 +45,7 @@ pub use datasets::DatasetRow;
 pub use episodes::EpisodeRow;
 pub use queries::{AnswerCounts, AnswerRow, CommitOutcome, QueryRow, SyntheticAnswer};
 pub use revisions::{ReanswerOutcome, UndoOutcome};
-pub use sessions::{NewSession, SessionRow, Status};
+pub use sessions::{NewSession, SessionRow, Status, StoredSpecError};
 pub use surveys::Survey;
 pub use trainers::{
     AddTrainer, PersonAnswer, TrainerOrigin, TrainerRef, TrainerRow, VoteOutcome, check_name,
