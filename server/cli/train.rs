@@ -196,7 +196,7 @@ pub fn resolve_config(
 
 /// Load an expert written by `dualrep expert`.
 pub fn load_expert(path: &Path, task: &str) -> anyhow::Result<Sac> {
-    crate::session::load_expert(path, task).map_err(anyhow::Error::msg)
+    Ok(crate::session::load_expert(path, task)?)
 }
 
 /// The run's config on a remote env: `task`'s (the env stands in for it), or the defaults for
@@ -227,7 +227,7 @@ fn find_expert(explicit: Option<&Path>, task: &str, builtin: Option<Task>) -> an
     match (explicit, builtin) {
         (Some(path), _) => load_expert(path, task),
         (None, _) if local.is_file() => load_expert(&local, task),
-        (None, Some(t)) => crate::session::load_task_expert(None, t).map_err(anyhow::Error::msg),
+        (None, Some(t)) => Ok(crate::session::load_task_expert(None, t)?),
         (None, None) => anyhow::bail!(
             "{task} has no shipped expert: train one with `dualrep expert --env-url ... --out {}` or give --expert",
             local.display()

@@ -16,10 +16,10 @@ pub enum ConnectError {
     #[error(transparent)]
     Env(#[from] EnvFault),
     /// The resume checkpoint is there but does not read.
-    #[error("reading the session's checkpoint {}: {source}", .path.display())]
+    #[error("reading the session's checkpoint {}: {error}", .path.display())]
     ReadCheckpoint {
         path: PathBuf,
-        source: std::io::Error,
+        error: std::io::Error,
     },
 }
 
@@ -46,10 +46,10 @@ impl RemotePlan {
         let resume_from = match std::fs::read(&self.resume_path) {
             Ok(bytes) => Some(bytes),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
-            Err(source) => {
+            Err(error) => {
                 return Err(ConnectError::ReadCheckpoint {
                     path: self.resume_path,
-                    source,
+                    error,
                 });
             }
         };

@@ -16,6 +16,7 @@
 
 mod asker;
 pub mod combine;
+mod error;
 mod evaluative_loop;
 pub mod events;
 pub mod plan;
@@ -26,6 +27,7 @@ pub mod runner;
 pub mod spec;
 
 pub use asker::{load_expert, load_task_expert};
+pub use error::{ExpertError, SessionError};
 pub use events::{
     AnswerValue, Answerer, Checkpoint, Control, Controls, Ending, Frame, Observer, QueryKind,
     Revision, SessionEvent, SessionSink, StoredRevision,

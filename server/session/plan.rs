@@ -27,7 +27,7 @@ pub enum PlanError {
     NoTask,
     /// The remote env's URL is not of the form the protocol takes.
     #[error("env: {0}")]
-    Env(#[source] EnvFault),
+    Env(EnvFault),
     /// `env_timeout_s` on a session without a remote env.
     #[error("env_timeout_s applies to sessions on a remote env (env: {{\"url\": ...}})")]
     EnvTimeoutWithoutEnv,

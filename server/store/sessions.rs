@@ -95,18 +95,18 @@ fn json(text: &str) -> serde_json::Value {
 
 /// A stored session's `config` column that no longer reads as a spec.
 #[derive(Debug, thiserror::Error)]
-#[error("the stored config of session {id}: {source}")]
+#[error("the stored config of session {id}: {error}")]
 pub struct StoredSpecError {
     pub id: String,
-    pub source: serde_json::Error,
+    pub error: serde_json::Error,
 }
 
 impl SessionRow {
     /// The session as launched (its `config` column).
     pub fn spec(&self) -> std::result::Result<crate::session::SessionSpec, StoredSpecError> {
-        serde_json::from_value(self.config.clone()).map_err(|source| StoredSpecError {
+        serde_json::from_value(self.config.clone()).map_err(|error| StoredSpecError {
             id: self.id.clone(),
-            source,
+            error,
         })
     }
 
