@@ -84,7 +84,7 @@ fn config(args: &ReproduceArgs) -> anyhow::Result<RobustnessConfig> {
         sets: args.sets.clone(),
         out: args.out.clone(),
     };
-    config.validate().map_err(anyhow::Error::msg)?;
+    config.validate()?;
     Ok(config)
 }
 
