@@ -8,6 +8,7 @@ use serde_json::json;
 use utoipa::ToSchema;
 
 use crate::hub::HubError;
+use crate::store::{NameError, SurveyError};
 
 #[derive(Debug, thiserror::Error)]
 pub enum ApiError {
@@ -100,6 +101,20 @@ impl IntoResponse for ApiError {
 impl From<sqlx::Error> for ApiError {
     fn from(e: sqlx::Error) -> Self {
         ApiError::Store(e)
+    }
+}
+
+/// A trainer's name that does not check is a malformed request.
+impl From<NameError> for ApiError {
+    fn from(e: NameError) -> Self {
+        ApiError::BadRequest(e.to_string())
+    }
+}
+
+/// A survey answer off its scale is a malformed request.
+impl From<SurveyError> for ApiError {
+    fn from(e: SurveyError) -> Self {
+        ApiError::BadRequest(e.to_string())
     }
 }
 
