@@ -36,4 +36,4 @@ pub use plan::{PlanError, SessionPlan};
 pub use query::{Clip, QueryContent, QueryData, SegmentData};
 pub use remote::{QueryNumbering, Reconnect, RemoteSession, StoredMoment};
 pub use runner::{SessionContext, digest, run_session};
-pub use spec::{SessionMethod, SessionSettings, SessionSpec, TrainerKind};
+pub use spec::{SessionMethod, SessionSettings, SessionSpec, TrainerKind, UnknownMethod};

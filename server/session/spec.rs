@@ -80,20 +80,21 @@ impl fmt::Display for SessionMethod {
     }
 }
 
-impl FromStr for SessionMethod {
-    type Err = String;
+/// A method name that is none of ours (the name as given).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown method {0:?}: expected dref, ef-<percent>, sac, drpl, drpl-ss, fragment or full")]
+pub struct UnknownMethod(pub String);
 
-    fn from_str(s: &str) -> Result<Self, String> {
+impl FromStr for SessionMethod {
+    type Err = UnknownMethod;
+
+    fn from_str(s: &str) -> Result<Self, UnknownMethod> {
         if let Ok(m) = s.parse::<QueryMethod>() {
             return Ok(SessionMethod::Preference(m));
         }
         s.parse::<EvaluativeMethod>()
             .map(SessionMethod::Evaluative)
-            .map_err(|_| {
-                format!(
-                    "unknown method {s:?}: expected dref, ef-<percent>, sac, drpl, drpl-ss, fragment or full"
-                )
-            })
+            .map_err(|_| UnknownMethod(s.to_string()))
     }
 }
 
@@ -330,12 +331,9 @@ mod tests {
             "ef-50".parse::<SessionMethod>().unwrap().to_string(),
             "ef-50"
         );
-        assert!(
-            "best"
-                .parse::<SessionMethod>()
-                .unwrap_err()
-                .contains("dref")
-        );
+        let e = "best".parse::<SessionMethod>().unwrap_err();
+        assert_eq!(e, UnknownMethod("best".into()));
+        assert!(e.to_string().contains("dref"));
     }
 
     #[test]
