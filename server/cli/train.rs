@@ -15,6 +15,7 @@ use anyhow::Context;
 use clap::Args;
 use serde::{Deserialize, Serialize};
 
+use super::arg_error::ArgError;
 use super::output::{publish_summary, write_atomically};
 use super::overrides;
 use super::progress::Progress;
@@ -139,13 +140,11 @@ fn next_multiple(step: u64, every: u64) -> u64 {
 /// Episodes behind `final_mean_return` and `final_success_rate`.
 const RECENT_EPISODES: usize = 10;
 
-fn parse_oracle_rule(s: &str) -> Result<OracleRule, String> {
+fn parse_oracle_rule(s: &str) -> Result<OracleRule, ArgError> {
     match s {
         "authors" => Ok(OracleRule::Authors),
         "sign-aware" => Ok(OracleRule::SignAware),
-        _ => Err(format!(
-            "unknown oracle rule {s:?}: expected authors or sign-aware"
-        )),
+        _ => Err(ArgError::OracleRule(s.to_string())),
     }
 }
 
