@@ -31,6 +31,7 @@ use crate::sim::Task;
 
 mod as_run;
 mod combine;
+mod error;
 mod evaluative;
 mod keys;
 mod people;
@@ -43,6 +44,7 @@ mod task_version;
 
 pub use as_run::{AsRunSection, Profile, SceneGraphChoice};
 pub use combine::Combine;
+pub use error::SettingsError;
 pub use evaluative::EvaluativeSection;
 pub use people::{NeverWord, RationalWord, TeacherBeta, TeacherSection, TeacherSkip};
 pub use preference::PreferenceSection;
@@ -141,7 +143,7 @@ impl Settings {
     /// (`paper`, `256,256`).
     pub fn from_pairs<'a>(
         pairs: impl IntoIterator<Item = (&'a str, &'a str)>,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, SettingsError> {
         let mut map = serde_json::Map::new();
         for (key, text) in pairs {
             let value = serde_json::from_str::<serde_json::Value>(text)
@@ -155,12 +157,11 @@ impl Settings {
 
     /// Settings from a JSON object (a launch request's `params`, a TOML file read as JSON).
     /// Errors name the key: `beta: invalid type: string ...`.
-    pub fn from_json(value: serde_json::Value) -> Result<Self, String> {
+    pub fn from_json(value: serde_json::Value) -> Result<Self, SettingsError> {
         let serde_json::Value::Object(map) = value else {
-            return Err(format!(
-                "invalid type: {}, expected struct Settings",
-                keys::unexpected(&value)
-            ));
+            return Err(SettingsError::NotAnObject {
+                found: keys::unexpected(&value),
+            });
         };
         keys::refuse_unknown(&map, Self::keys())?;
         let object = serde_json::Value::Object(map);
@@ -175,9 +176,10 @@ impl Settings {
     }
 
     /// `other`'s settings over ours.
-    pub fn merged(self, other: Settings) -> Result<Self, String> {
-        let mut base = serde_json::to_value(self).map_err(|e| e.to_string())?;
-        let over = serde_json::to_value(other).map_err(|e| e.to_string())?;
+    pub fn merged(self, other: Settings) -> Result<Self, SettingsError> {
+        let serialize = |e: serde_json::Error| SettingsError::Serialize(e.to_string());
+        let mut base = serde_json::to_value(self).map_err(serialize)?;
+        let over = serde_json::to_value(other).map_err(serialize)?;
         if let (Some(base), Some(over)) = (base.as_object_mut(), over.as_object()) {
             for (k, v) in over {
                 base.insert(k.clone(), v.clone());
@@ -187,7 +189,7 @@ impl Settings {
     }
 
     /// The session settings with defaults, checked.
-    pub fn session(&self) -> Result<SessionSettings, String> {
+    pub fn session(&self) -> Result<SessionSettings, SettingsError> {
         self.session.resolve()
     }
 

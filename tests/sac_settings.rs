@@ -3,11 +3,11 @@
 
 use dualrep::guidance::feedback_schedule::EvaluativeMethod;
 use dualrep::rl::sac::{ActorMix, HumanCriticConfig, SacConfig};
-use dualrep::settings::Settings;
+use dualrep::settings::{Settings, SettingsError};
 use dualrep::sim::Task;
 
 /// A run's SAC settings by name, as `--set` and a launch's `params` give them.
-fn sac_with(pairs: &[(&str, &str)]) -> Result<SacConfig, String> {
+fn sac_with(pairs: &[(&str, &str)]) -> Result<SacConfig, SettingsError> {
     Settings::from_pairs(pairs.iter().copied())?
         .evaluative(Task::LunarLander, EvaluativeMethod::DrefAuthors, 0)
         .map(|c| c.sac)
@@ -79,7 +79,11 @@ fn settings_reject_unknown_keys_and_bad_values_clearly() {
         ("lambda", "-1", ">= 0"),
     ] {
         let err = sac_with(&[(k, v)]).expect_err(&format!("{k}={v} accepted"));
-        assert!(err.contains(says), "{k}={v}: {err:?} should say {says:?}");
+        assert_eq!(err.key(), Some(k), "{k}={v}: {err:?} should name its key");
+        assert!(
+            err.to_string().contains(says),
+            "{k}={v}: {err:?} should say {says:?}"
+        );
     }
 }
 

@@ -8,6 +8,7 @@ use serde_json::json;
 use utoipa::ToSchema;
 
 use crate::hub::HubError;
+use crate::store::{NameError, SurveyError};
 
 #[derive(Debug, thiserror::Error)]
 pub enum ApiError {
@@ -103,12 +104,27 @@ impl From<sqlx::Error> for ApiError {
     }
 }
 
+/// A trainer's name that does not check is a malformed request.
+impl From<NameError> for ApiError {
+    fn from(e: NameError) -> Self {
+        ApiError::BadRequest(e.to_string())
+    }
+}
+
+/// A survey answer off its scale is a malformed request.
+impl From<SurveyError> for ApiError {
+    fn from(e: SurveyError) -> Self {
+        ApiError::BadRequest(e.to_string())
+    }
+}
+
 impl From<HubError> for ApiError {
     fn from(e: HubError) -> Self {
         match e {
             HubError::NotFound(id) => ApiError::NotFound(format!("no session {id}")),
             HubError::Conflict(m) => ApiError::Conflict(m),
-            HubError::Invalid(m) => ApiError::InvalidSession(m),
+            HubError::Invalid(e) => ApiError::InvalidSession(e.to_string()),
+            HubError::StoredSpec(e) => ApiError::InvalidSession(e.to_string()),
             HubError::Store(e) => e.into(),
         }
     }

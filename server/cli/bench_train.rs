@@ -52,8 +52,7 @@ pub fn run(args: TrainBenchArgs, compute: &Compute) -> anyhow::Result<()> {
     let mut trainer: Box<dyn EvaluativeTrainer> = match args.method {
         EvaluativeMethod::Sac => Box::new(NoTrainer),
         _ => {
-            let expert =
-                crate::session::load_task_expert(None, args.task).map_err(anyhow::Error::msg)?;
+            let expert = crate::session::load_task_expert(None, args.task)?;
             let act_dim = config.make_env().spec().action_space.dim();
             Box::new(ExpertOracle::new(expert, act_dim, OracleRule::Authors))
         }

@@ -1,5 +1,6 @@
 //! The `dualrep` command line: one sub-command per file, each a thin shell over the library.
 
+mod arg_error;
 mod bench;
 mod bench_env;
 mod bench_kernels;

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::Args;
 
+use super::arg_error::ArgError;
 use crate::settings::Settings;
 
 /// The settings flags the headless commands share.
@@ -31,9 +32,8 @@ impl OverrideArgs {
         };
         let from_flags =
             Settings::from_pairs(self.overrides.iter().map(|(k, v)| (k.as_str(), v.as_str())))
-                .map_err(anyhow::Error::msg)
                 .context("--set")?;
-        let settings = from_file.merged(from_flags).map_err(anyhow::Error::msg)?;
+        let settings = from_file.merged(from_flags)?;
         let session_only = settings.session_keys_set();
         if !session_only.is_empty() {
             bail!(
@@ -46,12 +46,12 @@ impl OverrideArgs {
 }
 
 /// One `key=value` pair, split at the first `=`.
-pub fn parse_pair(s: &str) -> Result<(String, String), String> {
+pub fn parse_pair(s: &str) -> Result<(String, String), ArgError> {
     let (k, v) = s
         .split_once('=')
-        .ok_or_else(|| format!("expected key=value, got {s:?}"))?;
+        .ok_or_else(|| ArgError::NotAPair(s.to_string()))?;
     if k.trim().is_empty() {
-        return Err(format!("empty key in {s:?}"));
+        return Err(ArgError::EmptyKey(s.to_string()));
     }
     Ok((k.trim().to_string(), v.trim().to_string()))
 }
@@ -70,9 +70,7 @@ pub fn read_toml(path: &Path) -> anyhow::Result<Settings> {
         );
     }
     let json = serde_json::to_value(&table)?;
-    Settings::from_json(json)
-        .map_err(anyhow::Error::msg)
-        .with_context(|| format!("reading settings from {}", path.display()))
+    Settings::from_json(json).with_context(|| format!("reading settings from {}", path.display()))
 }
 
 #[cfg(test)]

@@ -12,6 +12,7 @@ use anyhow::Context;
 use clap::Args;
 use serde::Serialize;
 
+use super::arg_error::ArgError;
 use super::output::publish_summary;
 use super::overrides;
 use super::progress::Progress;
@@ -56,13 +57,11 @@ pub struct PrefsArgs {
     pub remote: RemoteArgs,
 }
 
-fn parse_acquisition(s: &str) -> Result<Acquisition, String> {
+fn parse_acquisition(s: &str) -> Result<Acquisition, ArgError> {
     match s {
         "uniform" => Ok(Acquisition::Uniform),
         "mutual-information" => Ok(Acquisition::MutualInformation),
-        _ => Err(format!(
-            "unknown acquisition {s:?}: expected uniform or mutual-information"
-        )),
+        _ => Err(ArgError::Acquisition(s.to_string())),
     }
 }
 
@@ -148,9 +147,9 @@ pub fn resolve_config(
                 d.spec.max_episode_steps as usize,
             ))
         }
-        (None, None) => Err("give --task, --env-url, or both".into()),
+        (None, None) => anyhow::bail!("give --task, --env-url, or both"),
     };
-    let mut config = config.map_err(anyhow::Error::msg)?;
+    let mut config = config?;
     if let Some(n) = args.trajectories {
         config.trajectories = usize::try_from(n)?;
     }

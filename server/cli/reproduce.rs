@@ -268,7 +268,7 @@ fn grid_config(args: &ReproduceArgs) -> anyhow::Result<GridConfig> {
         sets: args.sets.clone(),
         out: args.out.clone(),
     };
-    config.validate().map_err(anyhow::Error::msg)?;
+    config.validate()?;
     Ok(config)
 }
 

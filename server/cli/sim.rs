@@ -28,8 +28,7 @@ pub struct SimArgs {
 
 pub fn run(args: SimArgs) -> anyhow::Result<()> {
     let options = Settings::from_pairs(args.options.iter().map(|(k, v)| (k.as_str(), v.as_str())))
-        .and_then(|s| s.env_options(args.task))
-        .map_err(anyhow::Error::msg)?;
+        .and_then(|s| s.env_options(args.task))?;
     let (summary, _) =
         run_episodes_with(args.task, &options, args.policy, args.episodes, args.seed);
     println!("{}", serde_json::to_string(&summary)?);

@@ -15,6 +15,7 @@ use anyhow::Context;
 use clap::Args;
 use serde::{Deserialize, Serialize};
 
+use super::arg_error::ArgError;
 use super::output::{publish_summary, write_atomically};
 use super::overrides;
 use super::progress::Progress;
@@ -139,13 +140,11 @@ fn next_multiple(step: u64, every: u64) -> u64 {
 /// Episodes behind `final_mean_return` and `final_success_rate`.
 const RECENT_EPISODES: usize = 10;
 
-fn parse_oracle_rule(s: &str) -> Result<OracleRule, String> {
+fn parse_oracle_rule(s: &str) -> Result<OracleRule, ArgError> {
     match s {
         "authors" => Ok(OracleRule::Authors),
         "sign-aware" => Ok(OracleRule::SignAware),
-        _ => Err(format!(
-            "unknown oracle rule {s:?}: expected authors or sign-aware"
-        )),
+        _ => Err(ArgError::OracleRule(s.to_string())),
     }
 }
 
@@ -196,7 +195,7 @@ pub fn resolve_config(
 
 /// Load an expert written by `dualrep expert`.
 pub fn load_expert(path: &Path, task: &str) -> anyhow::Result<Sac> {
-    crate::session::load_expert(path, task).map_err(anyhow::Error::msg)
+    Ok(crate::session::load_expert(path, task)?)
 }
 
 /// The run's config on a remote env: `task`'s (the env stands in for it), or the defaults for
@@ -227,7 +226,7 @@ fn find_expert(explicit: Option<&Path>, task: &str, builtin: Option<Task>) -> an
     match (explicit, builtin) {
         (Some(path), _) => load_expert(path, task),
         (None, _) if local.is_file() => load_expert(&local, task),
-        (None, Some(t)) => crate::session::load_task_expert(None, t).map_err(anyhow::Error::msg),
+        (None, Some(t)) => Ok(crate::session::load_task_expert(None, t)?),
         (None, None) => anyhow::bail!(
             "{task} has no shipped expert: train one with `dualrep expert --env-url ... --out {}` or give --expert",
             local.display()

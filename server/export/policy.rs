@@ -6,15 +6,27 @@
 
 use std::collections::HashMap;
 
-use safetensors::SafeTensors;
 use safetensors::tensor::TensorView;
+use safetensors::{SafeTensorError, SafeTensors};
+
+/// Why a learner checkpoint gives no policy file.
+#[derive(Debug, thiserror::Error)]
+pub enum PolicyError {
+    #[error("the learner checkpoint: {0}")]
+    Checkpoint(SafeTensorError),
+    #[error("the learner checkpoint's metadata: {0}")]
+    Metadata(SafeTensorError),
+    #[error("the learner checkpoint holds no actor")]
+    NoActor,
+    /// Writing the policy's tensors.
+    #[error("{0}")]
+    Write(SafeTensorError),
+}
 
 /// The actor's part of a learner checkpoint (`Sac::to_safetensors` bytes).
-pub fn policy_safetensors(learner: &[u8]) -> Result<Vec<u8>, String> {
-    let st =
-        SafeTensors::deserialize(learner).map_err(|e| format!("the learner checkpoint: {e}"))?;
-    let (_, header) = SafeTensors::read_metadata(learner)
-        .map_err(|e| format!("the learner checkpoint's metadata: {e}"))?;
+pub fn policy_safetensors(learner: &[u8]) -> Result<Vec<u8>, PolicyError> {
+    let st = SafeTensors::deserialize(learner).map_err(PolicyError::Checkpoint)?;
+    let (_, header) = SafeTensors::read_metadata(learner).map_err(PolicyError::Metadata)?;
     let source = header.metadata().clone().unwrap_or_default();
     let mut actor: Vec<(String, TensorView<'_>)> = st
         .tensors()
@@ -22,7 +34,7 @@ pub fn policy_safetensors(learner: &[u8]) -> Result<Vec<u8>, String> {
         .filter(|(name, _)| name.starts_with("actor."))
         .collect();
     if actor.is_empty() {
-        return Err("the learner checkpoint holds no actor".into());
+        return Err(PolicyError::NoActor);
     }
     actor.sort_by(|a, b| a.0.cmp(&b.0));
     let mut metadata = HashMap::from([
@@ -37,7 +49,7 @@ pub fn policy_safetensors(learner: &[u8]) -> Result<Vec<u8>, String> {
             metadata.insert(key.to_string(), v.clone());
         }
     }
-    safetensors::serialize(actor, Some(metadata)).map_err(|e| e.to_string())
+    safetensors::serialize(actor, Some(metadata)).map_err(PolicyError::Write)
 }
 
 #[cfg(test)]

@@ -4,8 +4,8 @@
 
 use std::path::Path;
 
-use super::policy::policy_safetensors;
-use super::tables;
+use super::policy::{PolicyError, policy_safetensors};
+use super::tables::{self, TableError};
 use crate::session::QueryKind;
 use crate::store::{SessionRow, Store};
 
@@ -28,8 +28,12 @@ pub enum ExportError {
     Missing(String),
     #[error(transparent)]
     Store(#[from] sqlx::Error),
+    /// The dataset's table could not be written.
     #[error("{0}")]
-    Failed(String),
+    Table(#[from] TableError),
+    /// The learner checkpoint gives no policy file.
+    #[error("{0}")]
+    Policy(#[from] PolicyError),
 }
 
 /// The file name an export of `session` goes by.
@@ -69,7 +73,7 @@ pub async fn export(
                 QueryKind::Evaluative => tables::transitions(&rows, &people, &trainers),
                 QueryKind::Preference => tables::pairs(&rows, &people, &trainers),
             };
-            table.map_err(|e| ExportError::Failed(e.to_string()))
+            Ok(table?)
         }
         Dataset::Posterior | Dataset::Policy => {
             let wanted = match what {
@@ -101,7 +105,7 @@ pub async fn export(
                 .await
                 .map_err(|e| ExportError::Missing(format!("{file}: {e}")))?;
             match what {
-                Dataset::Policy => policy_safetensors(&bytes).map_err(ExportError::Failed),
+                Dataset::Policy => Ok(policy_safetensors(&bytes)?),
                 _ => Ok(bytes),
             }
         }

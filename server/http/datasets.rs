@@ -18,7 +18,9 @@ async fn serve(state: &AppState, id: &str, what: Dataset) -> ApiResult<Response>
         .map_err(|e| match e {
             ExportError::Missing(m) => ApiError::NotFound(m),
             ExportError::Store(e) => ApiError::Store(e),
-            ExportError::Failed(m) => ApiError::ExportFailed(m),
+            e @ (ExportError::Table(_) | ExportError::Policy(_)) => {
+                ApiError::ExportFailed(e.to_string())
+            }
         })?;
     let content_type = match what {
         Dataset::Table => "application/vnd.apache.parquet",

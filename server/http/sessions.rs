@@ -414,7 +414,7 @@ pub async fn survey(
     JsonBody(survey): JsonBody<Survey>,
 ) -> ApiResult<Json<SessionView>> {
     let id = r.id.clone();
-    survey.validate().map_err(ApiError::BadRequest)?;
+    survey.validate()?;
     if state.hub.status_of(&r).is_active() {
         return Err(ApiError::Conflict(
             "the questions come after the session has ended".into(),

@@ -56,7 +56,7 @@ pub async fn session_row(state: &AppState, id: &str) -> ApiResult<SessionRow> {
 }
 
 fn name_of(JsonBody(request): JsonBody<NameRequest>) -> ApiResult<String> {
-    check_name(&request.name).map_err(ApiError::BadRequest)
+    Ok(check_name(&request.name)?)
 }
 
 async fn add(

@@ -36,8 +36,8 @@ use tokio::task::JoinHandle;
 pub use answers::UNDO_WINDOW;
 pub use handle::{AnswerReply, Identity, Joined, SessionHandle, Snapshot};
 
-use crate::session::{SessionPlan, SessionSpec};
-use crate::store::{NewSession, SessionRow, Status, Store};
+use crate::session::{PlanError, SessionPlan, SessionSpec};
+use crate::store::{NewSession, SessionRow, Status, Store, StoredSpecError};
 
 /// How the hub runs sessions.
 #[derive(Clone, Debug)]
@@ -70,8 +70,12 @@ pub enum HubError {
     NotFound(String),
     #[error("{0}")]
     Conflict(String),
+    /// A launch, or a stored session, that cannot become a plan.
     #[error("invalid session: {0}")]
-    Invalid(String),
+    Invalid(#[from] PlanError),
+    /// A stored session whose spec no longer reads.
+    #[error("invalid session: {0}")]
+    StoredSpec(#[from] StoredSpecError),
     #[error(transparent)]
     Store(#[from] sqlx::Error),
 }
@@ -115,7 +119,7 @@ impl Hub {
             .session
             .kernels
             .get_or_insert_with(crate::rl::kernels::default_path);
-        let plan = SessionPlan::new(spec).map_err(|e| HubError::Invalid(e.0))?;
+        let plan = SessionPlan::new(spec)?;
         let spec = &plan.spec;
         let id = random_hex(6);
         let token = random_hex(16);
@@ -309,8 +313,7 @@ impl Hub {
 /// A stored session's plan, read and checked once more as it starts again (a resume, or a
 /// queued session after a restart).
 fn plan_of(row: &SessionRow) -> Result<SessionPlan, HubError> {
-    let spec = row.spec().map_err(HubError::Invalid)?;
-    SessionPlan::new(spec).map_err(|e| HubError::Invalid(e.0))
+    Ok(SessionPlan::new(row.spec()?)?)
 }
 
 #[cfg(test)]

@@ -197,9 +197,9 @@ impl Owner {
         };
         match self.start_thread().await {
             Ok(events) => self.serve(events, commands).await,
-            Err(reason) => {
-                tracing::error!(session = %self.id, "{reason}");
-                self.set_status(Status::Failed, Some(reason)).await;
+            Err(e) => {
+                tracing::error!(session = %self.id, "{e}");
+                self.set_status(Status::Failed, Some(e.to_string())).await;
                 self.broadcast_ended();
                 self.forget();
             }

@@ -7,7 +7,21 @@ use std::time::Duration;
 
 use crate::remote_env::{RemoteTarget, Timeouts};
 use crate::session::{Reconnect, RemoteSession, SessionSpec, StoredMoment};
-use crate::sim::Env;
+use crate::sim::{Env, EnvFault};
+
+/// Why a session's remote env could not be reached or resumed from.
+#[derive(Debug, thiserror::Error)]
+pub enum ConnectError {
+    /// The env is unreachable, or not a copy of the session's task (its own words).
+    #[error(transparent)]
+    Env(#[from] EnvFault),
+    /// The resume checkpoint is there but does not read.
+    #[error("reading the session's checkpoint {}: {error}", .path.display())]
+    ReadCheckpoint {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+}
 
 /// What the session thread needs to reach its env.
 pub struct RemotePlan {
@@ -22,21 +36,21 @@ pub struct RemotePlan {
 
 impl RemotePlan {
     /// Connect, read the resume checkpoint if there is one; `Err`: why the session cannot run.
-    pub fn connect(self, spec: &SessionSpec) -> Result<RemoteSession, String> {
+    pub fn connect(self, spec: &SessionSpec) -> Result<RemoteSession, ConnectError> {
         let timeouts = Timeouts {
             request: Duration::from_secs_f64(self.timeout_s),
             ..Timeouts::default()
         };
-        let env = self.target.connect(spec.task, timeouts).map_err(|e| e.0)?;
+        let env = self.target.connect(spec.task, timeouts)?;
         let description = env.description().clone();
         let resume_from = match std::fs::read(&self.resume_path) {
             Ok(bytes) => Some(bytes),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
-            Err(e) => {
-                return Err(format!(
-                    "reading the session's checkpoint {}: {e}",
-                    self.resume_path.display()
-                ));
+            Err(error) => {
+                return Err(ConnectError::ReadCheckpoint {
+                    path: self.resume_path,
+                    error,
+                });
             }
         };
         let (target, task) = (self.target, spec.task);

@@ -12,10 +12,25 @@ use super::{recording, sink};
 use crate::record::RecordingOptions;
 use crate::session::{Controls, Ending, SessionContext, SessionEvent, SessionPlan, run_session};
 
+/// Why a session's thread could not start: the failed session's reason.
+#[derive(Debug, thiserror::Error)]
+pub enum StartError {
+    /// Its stored answers, revisions or latest checkpoint do not read.
+    #[error("reading the session's answers: {0}")]
+    Answers(sqlx::Error),
+    /// Its stored queries (a remote session's) do not read.
+    #[error("reading the session's queries: {0}")]
+    Queries(sqlx::Error),
+    #[error("the session's thread could not start: {0}")]
+    Spawn(std::io::Error),
+}
+
 impl Owner {
     /// Start the session thread; its events arrive on the returned channel, which closes when
     /// the thread has ended. `Err`: why it could not start.
-    pub(super) async fn start_thread(&mut self) -> Result<UnboundedReceiver<SessionEvent>, String> {
+    pub(super) async fn start_thread(
+        &mut self,
+    ) -> Result<UnboundedReceiver<SessionEvent>, StartError> {
         let id = self.id.clone();
         let (stored_answers, stored_revisions, checkpoint) = match (
             self.store.replay_answers(&id).await,
@@ -24,7 +39,7 @@ impl Owner {
         ) {
             (Ok(a), Ok(r), Ok(c)) => (a, r, c),
             (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => {
-                return Err(format!("reading the session's answers: {e}"));
+                return Err(StartError::Answers(e));
             }
         };
         // A checkpoint is checked only if the replay reaches it with stored answers alone (a
@@ -44,14 +59,14 @@ impl Owner {
                     .store
                     .query_count(&id)
                     .await
-                    .map_err(|e| format!("reading the session's queries: {e}"))?,
+                    .map_err(StartError::Queries)?,
                 stored_moments: if plan.spec.method.is_preference() {
                     Vec::new()
                 } else {
                     self.store
                         .stored_moments(&id)
                         .await
-                        .map_err(|e| format!("reading the session's queries: {e}"))?
+                        .map_err(StartError::Queries)?
                 },
             }),
         };
@@ -91,7 +106,7 @@ impl Owner {
                         Ok(r) => {
                             plan = match plan.on_remote(&r.description) {
                                 Ok(plan) => plan,
-                                Err(e) => return failed(e.0),
+                                Err(e) => return failed(e.to_string()),
                             };
                             let from_checkpoint =
                                 r.resume_from.is_some() && !plan.spec.method.is_preference();
@@ -102,7 +117,7 @@ impl Owner {
                             }
                             ctx.remote = Some(r);
                         }
-                        Err(reason) => return failed(reason),
+                        Err(e) => return failed(e.to_string()),
                     }
                 }
                 // Opening the file (and a viewer connection) is blocking IO: here, not on the
@@ -123,7 +138,7 @@ impl Owner {
                     failed(format!("the session panicked: {what}"));
                 }
             })
-            .map_err(|e| format!("the session's thread could not start: {e}"))?;
+            .map_err(StartError::Spawn)?;
         self.control = Some(control_tx);
         Ok(event_rx)
     }

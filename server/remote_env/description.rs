@@ -15,6 +15,62 @@ pub const MAX_DIM: usize = 65_536;
 /// The most DRPL features an env may declare.
 pub const MAX_FEATURES: usize = 64;
 
+/// What is wrong with an env's `hello`: the field, and what about it.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum DescriptionError {
+    #[error("id {0:?}: expected 1 to 200 printable characters")]
+    Id(String),
+    /// A space (`observation_space`, `action_space`) of more entries than [`MAX_DIM`].
+    #[error("{space}: shape {shape:?} has more than {MAX_DIM} entries")]
+    SpaceTooLarge {
+        space: &'static str,
+        shape: Vec<usize>,
+    },
+    #[error("{space}: shape {shape:?} has no entries")]
+    SpaceEmpty {
+        space: &'static str,
+        shape: Vec<usize>,
+    },
+    /// Bounds of other lengths than the shape's entries.
+    #[error("{space}: shape {shape:?} has {size} entries but low has {low} and high {high}")]
+    BoundsLength {
+        space: &'static str,
+        shape: Vec<usize>,
+        size: usize,
+        low: usize,
+        high: usize,
+    },
+    /// An action entry without finite bounds.
+    #[error("{space}: entry {entry} is unbounded; actions need finite low and high")]
+    Unbounded { space: &'static str, entry: usize },
+    /// An entry whose bounds are NaN, crossed, or (actions) equal.
+    #[error("{space}: entry {entry} has low {low} and high {high}")]
+    Bounds {
+        space: &'static str,
+        entry: usize,
+        low: f64,
+        high: f64,
+    },
+    #[error("control_hz {0}: expected a rate in (0, 10000] steps per second")]
+    ControlHz(f64),
+    #[error("max_episode_steps: expected at least 1")]
+    NoEpisodeSteps,
+    /// The declared predicates, in the scene graph's words.
+    #[error("predicates: {0}")]
+    Predicates(String),
+    #[error("features: {0} declared, at most {MAX_FEATURES}")]
+    TooManyFeatures(usize),
+    #[error("features: {0} is declared twice")]
+    FeatureTwice(String),
+    /// Names (`observation_names`, `action_names`) not one per entry.
+    #[error("{what}: {given} names for {dim} entries")]
+    NameCount {
+        what: &'static str,
+        given: usize,
+        dim: usize,
+    },
+}
+
 /// What dualrep keeps of an env's `hello`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RemoteDescription {
@@ -60,40 +116,52 @@ impl RemoteDescription {
     }
 }
 
-fn space(what: &str, s: &SpaceMessage, bounded: bool) -> Result<(Vec<f64>, Vec<f64>), String> {
+fn space(
+    what: &'static str,
+    s: &SpaceMessage,
+    bounded: bool,
+) -> Result<(Vec<f64>, Vec<f64>), DescriptionError> {
     let size = s
         .shape
         .iter()
         .try_fold(1usize, |n, &d| n.checked_mul(d))
         .filter(|&n| n <= MAX_DIM)
-        .ok_or_else(|| {
-            format!(
-                "{what}: shape {:?} has more than {MAX_DIM} entries",
-                s.shape
-            )
+        .ok_or_else(|| DescriptionError::SpaceTooLarge {
+            space: what,
+            shape: s.shape.clone(),
         })?;
     if size == 0 {
-        return Err(format!("{what}: shape {:?} has no entries", s.shape));
+        return Err(DescriptionError::SpaceEmpty {
+            space: what,
+            shape: s.shape.clone(),
+        });
     }
     if s.low.len() != size || s.high.len() != size {
-        return Err(format!(
-            "{what}: shape {:?} has {size} entries but low has {} and high {}",
-            s.shape,
-            s.low.len(),
-            s.high.len()
-        ));
+        return Err(DescriptionError::BoundsLength {
+            space: what,
+            shape: s.shape.clone(),
+            size,
+            low: s.low.len(),
+            high: s.high.len(),
+        });
     }
     let (mut low, mut high) = (Vec::with_capacity(size), Vec::with_capacity(size));
     for (i, (lo, hi)) in s.low.iter().zip(&s.high).enumerate() {
         let lo = lo.unwrap_or(f64::NEG_INFINITY);
         let hi = hi.unwrap_or(f64::INFINITY);
         if bounded && !(lo.is_finite() && hi.is_finite()) {
-            return Err(format!(
-                "{what}: entry {i} is unbounded; actions need finite low and high"
-            ));
+            return Err(DescriptionError::Unbounded {
+                space: what,
+                entry: i,
+            });
         }
         if lo.is_nan() || hi.is_nan() || lo > hi || (bounded && lo == hi) {
-            return Err(format!("{what}: entry {i} has low {lo} and high {hi}"));
+            return Err(DescriptionError::Bounds {
+                space: what,
+                entry: i,
+                low: lo,
+                high: hi,
+            });
         }
         low.push(lo);
         high.push(hi);
@@ -103,49 +171,42 @@ fn space(what: &str, s: &SpaceMessage, bounded: bool) -> Result<(Vec<f64>, Vec<f
 
 /// Names for `dim` entries: the declared ones (checked), else `prefix0`, `prefix1`, ...
 fn names(
-    what: &str,
+    what: &'static str,
     declared: &Option<Vec<String>>,
     dim: usize,
     prefix: &str,
-) -> Result<Vec<&'static str>, String> {
+) -> Result<Vec<&'static str>, DescriptionError> {
     match declared {
-        Some(list) if list.len() != dim => {
-            Err(format!("{what}: {} names for {dim} entries", list.len()))
-        }
+        Some(list) if list.len() != dim => Err(DescriptionError::NameCount {
+            what,
+            given: list.len(),
+            dim,
+        }),
         Some(list) => Ok(list.iter().map(|n| intern(n)).collect()),
         None => Ok((0..dim).map(|i| intern(&format!("{prefix}{i}"))).collect()),
     }
 }
 
 /// Check an env's `hello` and keep what dualrep needs; `Err` says what is wrong with it.
-pub fn check(d: &Description) -> Result<RemoteDescription, String> {
+pub fn check(d: &Description) -> Result<RemoteDescription, DescriptionError> {
     if d.id.is_empty() || d.id.len() > 200 || d.id.chars().any(char::is_control) {
-        return Err(format!(
-            "id {:?}: expected 1 to 200 printable characters",
-            d.id
-        ));
+        return Err(DescriptionError::Id(d.id.clone()));
     }
     let (obs_low, obs_high) = space("observation_space", &d.observation_space, false)?;
     let (action_low, action_high) = space("action_space", &d.action_space, true)?;
     if !(d.control_hz.is_finite() && d.control_hz > 0.0 && d.control_hz <= 10_000.0) {
-        return Err(format!(
-            "control_hz {}: expected a rate in (0, 10000] steps per second",
-            d.control_hz
-        ));
+        return Err(DescriptionError::ControlHz(d.control_hz));
     }
     if d.max_episode_steps == 0 {
-        return Err("max_episode_steps: expected at least 1".into());
+        return Err(DescriptionError::NoEpisodeSteps);
     }
-    let predicates = declare(&d.predicates).map_err(|e| format!("predicates: {e}"))?;
+    let predicates = declare(&d.predicates).map_err(DescriptionError::Predicates)?;
     if d.features.len() > MAX_FEATURES {
-        return Err(format!(
-            "features: {} declared, at most {MAX_FEATURES}",
-            d.features.len()
-        ));
+        return Err(DescriptionError::TooManyFeatures(d.features.len()));
     }
     let mut seen = std::collections::HashSet::new();
     if let Some(twice) = d.features.iter().find(|f| !seen.insert(f.as_str())) {
-        return Err(format!("features: {twice} is declared twice"));
+        return Err(DescriptionError::FeatureTwice(twice.clone()));
     }
     let obs_dim = obs_low.len();
     let act_dim = action_low.len();
@@ -183,7 +244,9 @@ mod tests {
     use super::*;
     use serde_json::json;
 
-    fn description(patch: serde_json::Value) -> Result<RemoteDescription, String> {
+    fn description(
+        patch: serde_json::Value,
+    ) -> Result<RemoteDescription, Box<dyn std::error::Error>> {
         let mut d = json!({
             "id": "Pendulum-v1",
             "observation_space": {"shape": [3], "low": [-1, -1, -8], "high": [1, 1, 8]},
@@ -197,8 +260,8 @@ mod tests {
         for (k, v) in patch.as_object().unwrap() {
             d[k] = v.clone();
         }
-        let d: Description = serde_json::from_value(d).map_err(|e| e.to_string())?;
-        check(&d)
+        let d: Description = serde_json::from_value(d)?;
+        Ok(check(&d)?)
     }
 
     #[test]
@@ -225,7 +288,7 @@ mod tests {
 
     #[test]
     fn a_broken_hello_says_what_is_wrong() {
-        let refused = |patch| description(patch).unwrap_err();
+        let refused = |patch| description(patch).unwrap_err().to_string();
         assert!(
             refused(json!({"action_space": {"shape": [2], "low": [-1], "high": [1]}}))
                 .contains("low has 1")
@@ -239,6 +302,23 @@ mod tests {
                 .contains("low 1")
         );
         assert!(refused(json!({"control_hz": 0})).contains("control_hz"));
+        let d: Description = serde_json::from_value(json!({
+            "id": "x",
+            "observation_space": {"shape": [1], "low": [0], "high": [1]},
+            "action_space": {"shape": [1], "low": [1], "high": [1]},
+            "control_hz": 20,
+            "max_episode_steps": 1
+        }))
+        .unwrap();
+        assert_eq!(
+            check(&d),
+            Err(DescriptionError::Bounds {
+                space: "action_space",
+                entry: 0,
+                low: 1.0,
+                high: 1.0
+            })
+        );
         assert!(refused(json!({"max_episode_steps": 0})).contains("max_episode_steps"));
         assert!(
             refused(json!({"predicates": [{"name": "A", "label": "a"}]})).contains("predicates")

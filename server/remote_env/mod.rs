@@ -14,5 +14,5 @@ mod source;
 pub mod wire;
 
 pub use client::{DEFAULT_REQUEST_TIMEOUT, RemoteEnv, Timeouts, parse_url};
-pub use description::RemoteDescription;
+pub use description::{DescriptionError, RemoteDescription};
 pub use source::RemoteTarget;

@@ -20,10 +20,8 @@ pub struct RemoteTarget {
 
 impl RemoteTarget {
     /// Check the URL's form (the env itself is reached when the session starts).
-    pub fn validate(&self) -> Result<(), String> {
-        super::client::parse_url(&self.url)
-            .map(|_| ())
-            .map_err(|e| e.0)
+    pub fn validate(&self) -> Result<(), EnvFault> {
+        super::client::parse_url(&self.url).map(|_| ())
     }
 
     /// Connect; with `task`, check that the env is a copy of it (the same observation and

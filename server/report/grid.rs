@@ -7,6 +7,32 @@ use super::methods::{matched_ef_method, paper_steps};
 use super::run_files::run_dir;
 use crate::sim::Task;
 
+/// Why a grid (Figure 3's or 5's, or the robustness grid) cannot run, found before any run
+/// starts.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum GridError {
+    #[error("a grid needs at least one task, one seed and one method")]
+    Empty,
+    /// The robustness figure asked of a `GridConfig`.
+    #[error("the robustness grid is a `report::robustness::RobustnessConfig`")]
+    RobustnessFigure,
+    /// A method `train` or `prefs` does not run for the figure.
+    #[error("unknown method {method:?} for {}: expected {}", .figure.stem(), .figure.known_methods())]
+    UnknownMethod { method: String, figure: Figure },
+    /// A robustness grid without tasks or seeds.
+    #[error("a grid needs at least one task and one seed")]
+    NoTaskOrSeed,
+    /// A robustness grid without methods.
+    #[error("a robustness grid needs an evaluative or a preference method")]
+    NoMethod,
+    /// An error rate (percent) of 100 or more.
+    #[error("--errors: {0} is not a percentage below 100")]
+    ErrorRate(u32),
+    /// A rationality that is negative or not finite.
+    #[error("--betas: {0} is not a rationality >= 0")]
+    Beta(f64),
+}
+
 /// Which of the paper's figures a grid reproduces.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Figure {
@@ -21,6 +47,17 @@ pub enum Figure {
 
 impl Figure {
     /// The file stem of the figure ("fig3").
+    /// The methods a grid of this figure runs, as a refusal lists them.
+    fn known_methods(self) -> &'static str {
+        match self {
+            Figure::Fig3 => {
+                "dref, dref-authors, sac, sac-r100, dref-masked, ef-<p> (0 <= p <= 100), \
+                 ef-dref, ef-dref-authors"
+            }
+            Figure::Fig5 | Figure::Robustness => "drpl, drpl-ss, fragment, full",
+        }
+    }
+
     pub fn stem(self) -> &'static str {
         match self {
             Figure::Fig3 => "fig3",
@@ -114,12 +151,12 @@ impl RunSpec {
 impl GridConfig {
     /// Checks the method names against what `train` and `prefs` accept, so that a typo fails
     /// before hours of runs rather than as a wall of failed children.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), GridError> {
         if self.tasks.is_empty() || self.seeds == 0 || self.methods.is_empty() {
-            return Err("a grid needs at least one task, one seed and one method".into());
+            return Err(GridError::Empty);
         }
         if self.figure == Figure::Robustness {
-            return Err("the robustness grid is a `report::robustness::RobustnessConfig`".into());
+            return Err(GridError::RobustnessFigure);
         }
         for m in &self.methods {
             let ok = match self.figure {
@@ -143,17 +180,10 @@ impl GridConfig {
                 }
             };
             if !ok {
-                let known = match self.figure {
-                    Figure::Fig3 => {
-                        "dref, dref-authors, sac, sac-r100, dref-masked, ef-<p> (0 <= p <= 100), \
-                         ef-dref, ef-dref-authors"
-                    }
-                    Figure::Fig5 | Figure::Robustness => "drpl, drpl-ss, fragment, full",
-                };
-                return Err(format!(
-                    "unknown method {m:?} for {}: expected {known}",
-                    self.figure.stem()
-                ));
+                return Err(GridError::UnknownMethod {
+                    method: m.clone(),
+                    figure: self.figure,
+                });
             }
         }
         Ok(())

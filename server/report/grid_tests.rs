@@ -109,6 +109,14 @@ fn report_grid_rejects_unknown_methods_before_running_anything() {
             .is_ok()
     );
     let err = config(Figure::Fig3, &["drpl"]).validate().unwrap_err();
+    assert_eq!(
+        err,
+        GridError::UnknownMethod {
+            method: "drpl".into(),
+            figure: Figure::Fig3
+        }
+    );
+    let err = err.to_string();
     assert!(err.contains("unknown method \"drpl\" for fig3"), "{err}");
     assert!(config(Figure::Fig3, &["ef-150"]).validate().is_err());
     assert!(config(Figure::Fig5, &["dref"]).validate().is_err());

@@ -11,7 +11,7 @@
 use std::fmt::Write;
 use std::path::PathBuf;
 
-use super::grid::RunSpec;
+use super::grid::{GridError, RunSpec};
 use super::methods::{display_name, task_rank, task_title};
 use super::run_files::{PrefsRun, TrainRun, run_dir};
 use super::stats::{MeanSe, mean_se};
@@ -94,15 +94,15 @@ pub fn parse_label(label: &str) -> Option<(String, Level)> {
 }
 
 impl RobustnessConfig {
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), GridError> {
         if self.tasks.is_empty() || self.seeds == 0 {
-            return Err("a grid needs at least one task and one seed".into());
+            return Err(GridError::NoTaskOrSeed);
         }
         if self.train_methods.is_empty() && self.prefs_methods.is_empty() {
-            return Err("a robustness grid needs an evaluative or a preference method".into());
+            return Err(GridError::NoMethod);
         }
         if let Some(e) = self.errors.iter().find(|e| **e >= 100) {
-            return Err(format!("--errors: {e} is not a percentage below 100"));
+            return Err(GridError::ErrorRate(*e));
         }
         if let Some(b) = self
             .betas
@@ -110,7 +110,7 @@ impl RobustnessConfig {
             .flatten()
             .find(|b| !(b.is_finite() && **b >= 0.0))
         {
-            return Err(format!("--betas: {b} is not a rationality >= 0"));
+            return Err(GridError::Beta(*b));
         }
         Ok(())
     }

@@ -15,6 +15,7 @@ use crate::rl::Sac;
 use crate::scene_graph::SceneGraph;
 use crate::sim::{Env, EnvOptions, Task};
 
+use super::error::{ExpertError, SessionError};
 use super::events::{
     AnswerValue, Controls, Observer, QueryKind, Revision, SessionEvent, SessionSink, StoredRevision,
 };
@@ -23,29 +24,26 @@ use super::remote::{Reconnect, StoredMoment};
 use super::runner::SessionContext;
 
 /// Load an expert written by `dualrep expert` (the synthetic evaluative trainer consults it).
-pub fn load_expert(path: &Path, task: &str) -> Result<Sac, String> {
-    let bytes = std::fs::read(path).map_err(|e| {
-        let how = match task.parse::<Task>() {
-            Ok(t) => format!("`dualrep expert --task {t}`"),
-            Err(_) => format!("`dualrep expert --env-url URL` on {task}"),
-        };
-        format!(
-            "the synthetic trainer needs an expert at {} ({e}); train one with {how}",
-            path.display()
-        )
+pub fn load_expert(path: &Path, task: &str) -> Result<Sac, ExpertError> {
+    let bytes = std::fs::read(path).map_err(|error| ExpertError::Missing {
+        path: path.to_path_buf(),
+        task: task.to_string(),
+        error,
     })?;
-    Sac::from_safetensors(&bytes).map_err(|e| format!("loading the expert {}: {e}", path.display()))
+    Sac::from_safetensors(&bytes).map_err(|error| ExpertError::Unreadable {
+        path: path.to_path_buf(),
+        error,
+    })
 }
 
 /// The expert of `task`: `<dir>/<task>.safetensors` when a folder is given, else the one the
 /// binary ships.
-pub fn load_task_expert(dir: Option<&Path>, task: Task) -> Result<Sac, String> {
+pub fn load_task_expert(dir: Option<&Path>, task: Task) -> Result<Sac, ExpertError> {
     match dir {
         Some(dir) => load_expert(&dir.join(format!("{task}.safetensors")), task.id()),
         None => {
-            let bytes = crate::shipped::expert(task)
-                .ok_or_else(|| format!("this binary ships no expert for {task}"))?;
-            Sac::from_safetensors(&bytes).map_err(|e| format!("loading the shipped expert: {e}"))
+            let bytes = crate::shipped::expert(task).ok_or(ExpertError::NotShipped(task))?;
+            Sac::from_safetensors(&bytes).map_err(ExpertError::ShippedUnreadable)
         }
     }
 }
@@ -63,7 +61,7 @@ pub(super) struct Asker {
     pub(super) aborted: bool,
     /// The env failed while a query was being prepared (a remote env replaying a clip): the
     /// query was not asked, and the session ends with this reason.
-    pub(super) fault: Option<String>,
+    pub(super) fault: Option<SessionError>,
     /// A person answered since the last call of [`Asker::take_answered`].
     answered_live: bool,
     /// A remote session resumed from a checkpoint: the queries stored after it, from `seq` on,
@@ -243,7 +241,7 @@ impl Asker {
         abstract_state: u32,
         kind: QueryKind,
         describe: String,
-        content: impl FnOnce() -> Result<(QueryContent, QueryData), String>,
+        content: impl FnOnce() -> Result<(QueryContent, QueryData), SessionError>,
     ) -> Option<AnswerValue> {
         if let Some(v) = self.replay.pop_front() {
             return Some(self.replayed(step, kind, describe, v));
@@ -423,20 +421,24 @@ pub(super) enum ClipEnv {
 }
 
 impl ClipEnv {
-    fn render(&mut self, trajectory: &Trajectory, clip: &Clip) -> Result<query::Clip, String> {
+    fn render(
+        &mut self,
+        trajectory: &Trajectory,
+        clip: &Clip,
+    ) -> Result<query::Clip, SessionError> {
         match self {
             ClipEnv::Builtin { task, options } => {
                 Ok(query::render_clip(*task, options, trajectory, clip))
             }
             ClipEnv::Remote { reconnect, env } => {
                 if env.is_none() {
-                    *env = Some(reconnect().map_err(|e| e.to_string())?);
+                    *env = Some(reconnect()?);
                 }
                 let on = env.as_deref_mut().expect("connected above");
                 query::render_clip_on(on, trajectory, clip).map_err(|e| {
                     // A broken connection is not used again.
                     *env = None;
-                    format!("replaying a clip: {e}")
+                    SessionError::ClipReplay(e)
                 })
             }
         }

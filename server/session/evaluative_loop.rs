@@ -7,6 +7,7 @@
 use std::time::{Duration, Instant};
 
 use super::asker::{Asker, EvaluativeAsker, Judge, load_expert, load_task_expert};
+use super::error::SessionError;
 use super::events::{
     AnswerValue, Checkpoint, Ending, Frame, Halt, Observer, SessionEvent, SessionSink,
 };
@@ -42,17 +43,18 @@ fn evaluative_checkpoint(run: &EvaluativeRun) -> Checkpoint {
 
 /// The expert a synthetic DREF or EF session consults: ours for our tasks; for a remote env's
 /// own task, `<models dir>/<env id>.safetensors`.
-fn expert(ctx: &SessionContext, task: &TaskRef) -> Result<Sac, String> {
-    match task {
-        TaskRef::Builtin(t) => load_task_expert(ctx.models_dir.as_deref(), *t),
+fn expert(ctx: &SessionContext, task: &TaskRef) -> Result<Sac, SessionError> {
+    Ok(match task {
+        TaskRef::Builtin(t) => load_task_expert(ctx.models_dir.as_deref(), *t)?,
         TaskRef::Declared(d) => match ctx.models_dir.as_deref() {
-            Some(dir) => load_expert(&dir.join(format!("{}.safetensors", d.env)), &d.env),
-            None => Err(format!(
-                "a synthetic session on {} needs an expert: train one with `dualrep expert --env-url URL --out DIR/{}.safetensors` and start the server with --models-dir DIR",
-                d.env, d.env
-            )),
+            Some(dir) => load_expert(&dir.join(format!("{}.safetensors", d.env)), &d.env)?,
+            None => {
+                return Err(SessionError::NoModelsDir {
+                    env: d.env.to_string(),
+                });
+            }
         },
-    }
+    })
 }
 
 /// The remote part of a session: its run checkpoints and query numbering.
@@ -68,7 +70,7 @@ pub(super) fn run(
     remote: Option<RemoteSession>,
     mut ctx: SessionContext,
     observer: Option<Box<dyn Observer>>,
-) -> Result<Ending, String> {
+) -> Result<Ending, SessionError> {
     let human = spec.trainer == TrainerKind::Human;
     let graph = config.scene_graph;
     let judge = if human {
@@ -123,16 +125,12 @@ pub(super) fn run(
                 Some(bytes) => {
                     let (run, notes) =
                         EvaluativeRun::resume_with_env(&bytes, &config, Some(env), &mut trainer)
-                            .map_err(|e| format!("resuming from the latest checkpoint: {e}"))?;
-                    let notes: ResumeNotes = serde_json::from_value(notes)
-                        .map_err(|e| format!("reading the latest checkpoint's notes: {e}"))?;
+                            .map_err(SessionError::Resume)?;
+                    let notes: ResumeNotes =
+                        serde_json::from_value(notes).map_err(SessionError::ResumeNotes)?;
                     (run, Some(notes.numbering), notes.episode)
                 }
-                None => (
-                    EvaluativeRun::with_env(config, env, spec.budget).map_err(|e| e.0)?,
-                    None,
-                    0,
-                ),
+                None => (EvaluativeRun::with_env(config, env, spec.budget)?, None, 0),
             };
             // The numbering as of the checkpoint: the catch-up adds what it gives up on.
             let numbering = saved.unwrap_or_default();
@@ -154,7 +152,7 @@ fn drive(
     verify: Option<(u64, String)>,
     mut resumable: Option<Resumable>,
     first_episode: u64,
-) -> Result<Ending, String> {
+) -> Result<Ending, SessionError> {
     let human = spec.trainer == TrainerKind::Human;
     let sink = trainer.asker.sink.clone();
     if let Judge::Human { history, .. } = &mut trainer.judge {
@@ -193,7 +191,10 @@ fn drive(
             sink.send(SessionEvent::Progress {
                 progress: run.steps(),
             });
-            format!("at step {}: {fault}", run.steps())
+            SessionError::EnvAtStep {
+                step: run.steps(),
+                fault,
+            }
         })?;
         if trainer.asker.aborted {
             let h = trainer.asker.controls.halted().unwrap_or(Halt::Shutdown);

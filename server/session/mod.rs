@@ -16,6 +16,7 @@
 
 mod asker;
 pub mod combine;
+mod error;
 mod evaluative_loop;
 pub mod events;
 pub mod plan;
@@ -26,6 +27,7 @@ pub mod runner;
 pub mod spec;
 
 pub use asker::{load_expert, load_task_expert};
+pub use error::{ExpertError, SessionError};
 pub use events::{
     AnswerValue, Answerer, Checkpoint, Control, Controls, Ending, Frame, Observer, QueryKind,
     Revision, SessionEvent, SessionSink, StoredRevision,
@@ -34,4 +36,4 @@ pub use plan::{PlanError, SessionPlan};
 pub use query::{Clip, QueryContent, QueryData, SegmentData};
 pub use remote::{QueryNumbering, Reconnect, RemoteSession, StoredMoment};
 pub use runner::{SessionContext, digest, run_session};
-pub use spec::{SessionMethod, SessionSettings, SessionSpec, TrainerKind};
+pub use spec::{SessionMethod, SessionSettings, SessionSpec, TrainerKind, UnknownMethod};

@@ -3,31 +3,51 @@
 //! by move, and the trainer's `hello` is read from it: nothing after launch reads the spec's
 //! settings again, and nothing can disagree about them.
 
-use std::fmt;
-
 use crate::remote_env::RemoteDescription;
 use crate::scene_graph::SceneGraph;
+use crate::settings::{Combine, SettingsError};
+use crate::sim::EnvFault;
 
 use super::events::QueryKind;
 use super::spec::{RunConfig, SessionSettings, SessionSpec};
 
 /// Why a spec cannot become a plan: what a launch is refused with (a 422), and what a stored
 /// session that no longer reads fails with.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct PlanError(pub String);
-
-impl fmt::Display for PlanError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for PlanError {}
-
-impl From<String> for PlanError {
-    fn from(reason: String) -> Self {
-        PlanError(reason)
-    }
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum PlanError {
+    /// A setting that does not read or does not apply to the session's task and method.
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
+    #[error("the budget (steps or queries) must be at least 1")]
+    NoBudget,
+    #[error("budget {0} is above the limit of 10,000,000")]
+    BudgetTooLarge(u64),
+    /// Neither a task of ours nor a remote env.
+    #[error("give a task, an env ({{\"url\": ...}}), or both")]
+    NoTask,
+    /// The remote env's URL is not of the form the protocol takes.
+    #[error("env: {0}")]
+    Env(EnvFault),
+    /// `env_timeout_s` on a session without a remote env.
+    #[error("env_timeout_s applies to sessions on a remote env (env: {{\"url\": ...}})")]
+    EnvTimeoutWithoutEnv,
+    /// A combine rule of the other kind of query.
+    #[error(
+        "combine: {} does not combine {} answers (evaluative: majority or mean; preference: each)",
+        .combine.as_str(),
+        .kind.as_str()
+    )]
+    CombineDoesNotFit { combine: Combine, kind: QueryKind },
+    /// Several answers per query on a session whose trainer is synthetic.
+    #[error(
+        "answers_per_query = {0}: several answers per query come from people; this session's trainer is synthetic"
+    )]
+    SeveralAnswersNeedPeople(usize),
+    /// Teacher faults on a session that people answer.
+    #[error(
+        "teacher_* settings give the synthetic trainer faults; this session's trainer is human"
+    )]
+    FaultsOnPeople,
 }
 
 /// A validated session: the spec, its session settings, the algorithm's configuration, the

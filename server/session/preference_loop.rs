@@ -3,6 +3,7 @@
 //! the belief, query after query; a resume replays the stored answers over the same pool.
 
 use super::asker::{Asker, ClipEnv, Comparer, PreferenceAsker};
+use super::error::SessionError;
 use super::events::{AnswerValue, Checkpoint, Ending, Halt, Observer, SessionEvent};
 use super::remote::RemoteSession;
 use super::runner::{SessionContext, check_replay, digest, halt_ending, revised};
@@ -41,16 +42,15 @@ pub(super) fn run(
     remote: Option<RemoteSession>,
     mut ctx: SessionContext,
     observer: Option<Box<dyn Observer>>,
-) -> Result<Ending, String> {
+) -> Result<Ending, SessionError> {
     let human = spec.trainer == TrainerKind::Human;
     if let Some(r) = &remote
         && human
         && !r.description.deterministic
     {
-        return Err(format!(
-            "{} says it does not repeat an episode from its seed (deterministic: false): people compare clips replayed from the recorded trajectories, so a human preference session needs an env that does",
-            r.description.spec.id
-        ));
+        return Err(SessionError::NotDeterministic {
+            env: r.description.spec.id.to_string(),
+        });
     }
     let verify = ctx.verify.take();
     let sink = ctx.sink.clone();
@@ -79,7 +79,7 @@ pub(super) fn run(
                     env.set_frames(false);
                     let trajs =
                         PreferenceRun::record_trajectories_on(&config, env.as_mut(), &mut |_| {})
-                            .map_err(|e| format!("recording the trajectories: {e}"))?;
+                            .map_err(SessionError::RecordTrajectories)?;
                     let bytes = keep_trajectories(&trajs, &config);
                     (trajs, Some(bytes))
                 }
@@ -93,9 +93,7 @@ pub(super) fn run(
     };
     let pool = QueryPool::from_trajectories(&config.task, &trajectories, config.min_run);
     if matches!(config.task, TaskRef::Declared(_)) && pool.segments().is_empty() {
-        return Err(
-            "the recorded trajectories have no segments to compare (the env's predicates never change for long enough)".into(),
-        );
+        return Err(SessionError::NoSegments);
     }
     let run = PreferenceRun::with_pool(config, pool);
     if let Some(bytes) = recorded {
@@ -137,8 +135,8 @@ fn keep_trajectories(trajectories: &[Trajectory], config: &PreferenceRunConfig) 
 fn kept_trajectories(
     bytes: &[u8],
     config: &PreferenceRunConfig,
-) -> Result<Vec<Trajectory>, String> {
-    let bad = |e: &str| format!("reading the recorded trajectories: {e}");
+) -> Result<Vec<Trajectory>, SessionError> {
+    let bad = |e: &str| SessionError::KeptTrajectories(e.to_string());
     let (len, rest) = bytes
         .split_first_chunk::<8>()
         .ok_or_else(|| bad("cut short"))?;
@@ -150,9 +148,7 @@ fn kept_trajectories(
     let saved: PreferenceRunConfig =
         serde_json::from_slice(head).map_err(|e| bad(&e.to_string()))?;
     if saved != *config {
-        return Err(
-            "the env does not describe itself as when the session recorded its trajectories (other predicates, features or sizes?)".into(),
-        );
+        return Err(SessionError::EnvChanged);
     }
     trajectory_bytes::from_bytes(trajectories).map_err(|e| bad(&e))
 }
@@ -162,7 +158,7 @@ fn drive(
     mut run: PreferenceRun,
     mut trainer: PreferenceAsker,
     verify: Option<(u64, String)>,
-) -> Result<Ending, String> {
+) -> Result<Ending, SessionError> {
     let sink = trainer.asker.sink.clone();
     while (run.queries() as u64) < spec.budget {
         if let Some(h) = trainer.asker.controls.poll() {

@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use crate::rl::kernels::{self, KernelPath};
 
+use super::error::SessionError;
 use super::events::{
     AnswerValue, Controls, Ending, Halt, Observer, Revision, SessionEvent, SessionSink,
     StoredRevision,
@@ -49,32 +50,32 @@ pub fn run_session(plan: SessionPlan, ctx: SessionContext) -> Ending {
             let _active = kernels::ActiveLearner::register();
             match kernels::with_path(path, || run(plan, ctx)) {
                 Ok(ending) => ending,
-                Err(reason) => Ending::Failed(reason),
+                Err(e) => Ending::Failed(e.to_string()),
             }
         }
-        Err(reason) => Ending::Failed(reason),
+        Err(e) => Ending::Failed(e.to_string()),
     };
     sink.send(SessionEvent::Ended(ending.clone()));
     ending
 }
 
 /// The kernels to run `plan` with: those it was launched with, or others of the same numerics.
-fn session_kernels(plan: &SessionPlan) -> Result<KernelPath, String> {
+fn session_kernels(plan: &SessionPlan) -> Result<KernelPath, SessionError> {
     match plan.settings.kernels {
         None => Ok(kernels::default_path()),
-        Some(path) => path.available_equivalent().ok_or_else(|| {
-            format!("the session computes with the {path} kernels, which this CPU cannot run")
-        }),
+        Some(path) => path
+            .available_equivalent()
+            .ok_or(SessionError::KernelsUnavailable(path)),
     }
 }
 
 /// Builds the run and drives it. The observer (the recording) goes with the trainer and is
 /// dropped, and so flushed, before the session reports its end.
-fn run(plan: SessionPlan, mut ctx: SessionContext) -> Result<Ending, String> {
+fn run(plan: SessionPlan, mut ctx: SessionContext) -> Result<Ending, SessionError> {
     let observer = ctx.observer.take();
     let remote = ctx.remote.take();
     if plan.spec.env.is_some() != remote.is_some() {
-        return Err("a session on a remote env needs its env connected (and only such one)".into());
+        return Err(SessionError::RemoteNotConnected);
     }
     let SessionPlan {
         spec,
@@ -103,16 +104,18 @@ pub(super) fn check_replay(
     verify: &Option<(u64, String)>,
     progress: u64,
     digest_now: impl FnOnce() -> String,
-) -> Result<(), String> {
+) -> Result<(), SessionError> {
     match verify {
         Some((at, expected)) if *at == progress => {
             let got = digest_now();
             if &got == expected {
                 Ok(())
             } else {
-                Err(format!(
-                    "the resumed session's replay diverged from its checkpoint at {progress} (digest {got}, stored {expected})"
-                ))
+                Err(SessionError::ReplayDiverged {
+                    progress,
+                    got,
+                    expected: expected.clone(),
+                })
             }
         }
         _ => Ok(()),

@@ -14,10 +14,11 @@ use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::guidance::human_pace::{HumanPace, PEOPLE_QUERIES_PER_MINUTE};
 use crate::remote_env::{RemoteDescription, RemoteTarget};
 use crate::scene_graph::SceneGraph;
-use crate::settings::Settings;
+use crate::settings::{Settings, SettingsError};
 use crate::sim::{DeclaredTask, Task};
 
 use super::events::QueryKind;
+use super::plan::PlanError;
 
 pub use crate::settings::{
     DEFAULT_ANSWER_TIMEOUT_S, DEFAULT_CHECKPOINT_EVERY, DEFAULT_CLIP_FRAMES, DEFAULT_ENV_TIMEOUT_S,
@@ -79,20 +80,21 @@ impl fmt::Display for SessionMethod {
     }
 }
 
-impl FromStr for SessionMethod {
-    type Err = String;
+/// A method name that is none of ours (the name as given).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown method {0:?}: expected dref, ef-<percent>, sac, drpl, drpl-ss, fragment or full")]
+pub struct UnknownMethod(pub String);
 
-    fn from_str(s: &str) -> Result<Self, String> {
+impl FromStr for SessionMethod {
+    type Err = UnknownMethod;
+
+    fn from_str(s: &str) -> Result<Self, UnknownMethod> {
         if let Ok(m) = s.parse::<QueryMethod>() {
             return Ok(SessionMethod::Preference(m));
         }
         s.parse::<EvaluativeMethod>()
             .map(SessionMethod::Evaluative)
-            .map_err(|_| {
-                format!(
-                    "unknown method {s:?}: expected dref, ef-<percent>, sac, drpl, drpl-ss, fragment or full"
-                )
-            })
+            .map_err(|_| UnknownMethod(s.to_string()))
     }
 }
 
@@ -160,7 +162,7 @@ impl SessionSpec {
     pub(super) fn run_config_on(
         &self,
         declared: Option<&RemoteDescription>,
-    ) -> Result<RunConfig, String> {
+    ) -> Result<RunConfig, PlanError> {
         let (task, graph, max_steps) = match (self.task, declared) {
             (Some(task), _) => {
                 return Ok(match self.method {
@@ -200,7 +202,7 @@ impl SessionSpec {
     fn paced_for_people(
         &self,
         mut config: EvaluativeRunConfig,
-    ) -> Result<EvaluativeRunConfig, String> {
+    ) -> Result<EvaluativeRunConfig, SettingsError> {
         let unset = self.params.evaluative.max_queries_per_minute.is_none();
         if self.trainer == TrainerKind::Human && config.method == EvaluativeMethod::Dref && unset {
             let pace_hz = self.params.session()?.pace_hz;
@@ -211,25 +213,20 @@ impl SessionSpec {
 
     /// The budget and where the env is. A remote env is not reached here: it may start later
     /// than the session is queued.
-    pub(super) fn check_outline(&self) -> Result<(), String> {
+    pub(super) fn check_outline(&self) -> Result<(), PlanError> {
         if self.budget == 0 {
-            return Err("the budget (steps or queries) must be at least 1".into());
+            return Err(PlanError::NoBudget);
         }
         if self.budget > 10_000_000 {
-            return Err(format!(
-                "budget {} is above the limit of 10,000,000",
-                self.budget
-            ));
+            return Err(PlanError::BudgetTooLarge(self.budget));
         }
         match (&self.env, self.task) {
-            (None, None) => return Err("give a task, an env ({\"url\": ...}), or both".into()),
-            (Some(env), _) => env.validate().map_err(|e| format!("env: {e}"))?,
+            (None, None) => return Err(PlanError::NoTask),
+            (Some(env), _) => env.validate().map_err(PlanError::Env)?,
             (None, Some(_)) => {}
         }
         if self.env.is_none() && self.params.session.env_timeout_s.is_some() {
-            return Err(
-                "env_timeout_s applies to sessions on a remote env (env: {\"url\": ...})".into(),
-            );
+            return Err(PlanError::EnvTimeoutWithoutEnv);
         }
         Ok(())
     }
@@ -239,19 +236,17 @@ impl SessionSpec {
         &self,
         settings: &SessionSettings,
         run: &RunConfig,
-    ) -> Result<(), String> {
+    ) -> Result<(), PlanError> {
         let kind = self.method.query_kind();
         if !settings.combine.fits(kind) {
-            return Err(format!(
-                "combine: {} does not combine {} answers (evaluative: majority or mean; preference: each)",
-                settings.combine.as_str(),
-                kind.as_str()
-            ));
+            return Err(PlanError::CombineDoesNotFit {
+                combine: settings.combine,
+                kind,
+            });
         }
         if settings.answers_per_query > 1 && self.trainer != TrainerKind::Human {
-            return Err(format!(
-                "answers_per_query = {}: several answers per query come from people; this session's trainer is synthetic",
-                settings.answers_per_query
+            return Err(PlanError::SeveralAnswersNeedPeople(
+                settings.answers_per_query,
             ));
         }
         let teacher = match run {
@@ -259,10 +254,7 @@ impl SessionSpec {
             RunConfig::Preference(c) => &c.teacher,
         };
         if !teacher.is_perfect() && self.trainer == TrainerKind::Human {
-            return Err(
-                "teacher_* settings give the synthetic trainer faults; this session's trainer is human"
-                    .into(),
-            );
+            return Err(PlanError::FaultsOnPeople);
         }
         Ok(())
     }
@@ -339,12 +331,9 @@ mod tests {
             "ef-50".parse::<SessionMethod>().unwrap().to_string(),
             "ef-50"
         );
-        assert!(
-            "best"
-                .parse::<SessionMethod>()
-                .unwrap_err()
-                .contains("dref")
-        );
+        let e = "best".parse::<SessionMethod>().unwrap_err();
+        assert_eq!(e, UnknownMethod("best".into()));
+        assert!(e.to_string().contains("dref"));
     }
 
     #[test]
@@ -360,9 +349,16 @@ mod tests {
             spec("dref", json!({"pace_hz": -1}))
                 .plan()
                 .unwrap_err()
-                .0
+                .to_string()
                 .contains("pace_hz")
         );
+        assert!(matches!(
+            spec("dref", json!({"pace_hz": -1})).plan(),
+            Err(PlanError::Settings(SettingsError::BadValue {
+                key: "pace_hz",
+                ..
+            }))
+        ));
         // Recording settings are session settings, not hyper-parameters (the README documents
         // both for every method).
         for method in ["dref", "drpl"] {

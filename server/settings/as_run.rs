@@ -7,6 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::SettingsError;
 use crate::guidance::evaluative_run::{EvaluativeRunConfig, GraphAtEpisodeEnd, TimeLimitEnd};
 use crate::scene_graph::SceneGraph;
 use crate::sim::{Task, TaskRef};
@@ -65,7 +66,10 @@ impl AsRunSection {
     }
 
     /// The profile's values, before any other setting (which override them).
-    pub(super) fn apply_profile(&self, config: &mut EvaluativeRunConfig) -> Result<(), String> {
+    pub(super) fn apply_profile(
+        &self,
+        config: &mut EvaluativeRunConfig,
+    ) -> Result<(), SettingsError> {
         match self.profile {
             Some(Profile::AsRun) => apply(config),
             None | Some(Profile::Head) => Ok(()),
@@ -73,19 +77,24 @@ impl AsRunSection {
     }
 
     /// The switches given, checked, into `config`.
-    pub(super) fn apply_switches(&self, config: &mut EvaluativeRunConfig) -> Result<(), String> {
+    pub(super) fn apply_switches(
+        &self,
+        config: &mut EvaluativeRunConfig,
+    ) -> Result<(), SettingsError> {
         if let Some(a) = self.oracle_alpha0 {
             if !(a.is_finite() && a > 0.0 && a <= 1.0) {
-                return Err(format!(
-                    "oracle_alpha0: expected a number in (0, 1], got {a}"
+                return Err(SettingsError::bad(
+                    "oracle_alpha0",
+                    format!("expected a number in (0, 1], got {a}"),
                 ));
             }
             config.oracle.alpha0 = a;
         }
         if let Some(s) = self.oracle_action_scale {
             if !(s.is_finite() && s > 0.0) {
-                return Err(format!(
-                    "oracle_action_scale: expected a positive number, got {s}"
+                return Err(SettingsError::bad(
+                    "oracle_action_scale",
+                    format!("expected a positive number, got {s}"),
                 ));
             }
             config.oracle.action_scale = s;
@@ -111,13 +120,16 @@ impl AsRunSection {
 ///   the normalised one); robosuite's time-limit ends stored as terminal;
 /// - Placing (runs of 2022-06-06, f2ff175 / 5dce179): the 12-cell graph without gripper bits
 ///   (`SceneGraph::PlacingAsRun`), c 0.2, k 4 (as the head); time-limit ends terminal.
-fn apply(config: &mut EvaluativeRunConfig) -> Result<(), String> {
+fn apply(config: &mut EvaluativeRunConfig) -> Result<(), SettingsError> {
     let task = match &config.task {
         TaskRef::Builtin(task) => *task,
         TaskRef::Declared(d) => {
-            return Err(format!(
-                "profile: as-run describes the authors' runs of our three tasks, not {}",
-                d.env
+            return Err(SettingsError::bad(
+                "profile",
+                format!(
+                    "as-run describes the authors' runs of our three tasks, not {}",
+                    d.env
+                ),
             ));
         }
     };

@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::SettingsError;
 use super::sac::set_positive;
 use super::session::SessionSection;
 use crate::guidance::evaluative_run::EvaluativeRunConfig;
@@ -35,7 +36,7 @@ impl EvaluativeSection {
         &self,
         config: &mut EvaluativeRunConfig,
         session: &SessionSection,
-    ) -> Result<(), String> {
+    ) -> Result<(), SettingsError> {
         set_positive(&mut config.reward_scale, self.reward_scale, "reward_scale")?;
         if let Some(n) = self.max_queries_per_minute.filter(|n| *n > 0) {
             let pace_hz = session.resolve()?.pace_hz;

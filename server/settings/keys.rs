@@ -4,6 +4,8 @@
 use serde::Serialize;
 use serde::de::{self, Deserialize, DeserializeOwned, Deserializer, Visitor};
 
+use super::SettingsError;
+
 /// The keys a section reads, in its fields' order: the names serde's derive passes to
 /// `deserialize_struct`, caught by a deserializer that only listens.
 pub(super) fn of<'de, T: Deserialize<'de>>() -> &'static [&'static str] {
@@ -59,22 +61,25 @@ pub(super) fn first_set<T: Serialize + for<'de> Deserialize<'de>>(
 pub(super) fn refuse_unknown(
     map: &serde_json::Map<String, serde_json::Value>,
     known: &'static [&'static str],
-) -> Result<(), String> {
+) -> Result<(), SettingsError> {
     match map.keys().find(|k| !known.contains(&k.as_str())) {
         None => Ok(()),
-        Some(key) => Err(format!(
-            "{key}: {}",
-            <serde_json::Error as de::Error>::unknown_field(key, known)
-        )),
+        Some(key) => Err(SettingsError::UnknownKey {
+            key: key.clone(),
+            known,
+        }),
     }
 }
 
 /// A section out of the flat object of every setting (it skips the other sections' keys); a
 /// value's error names its key.
-pub(super) fn read<T: DeserializeOwned>(object: &serde_json::Value) -> Result<T, String> {
-    serde_path_to_error::deserialize(object).map_err(|e| match e.path().to_string() {
-        path if path == "." => e.into_inner().to_string(),
-        path => format!("{path}: {}", e.into_inner()),
+pub(super) fn read<T: DeserializeOwned>(object: &serde_json::Value) -> Result<T, SettingsError> {
+    serde_path_to_error::deserialize(object).map_err(|e| {
+        let path = e.path().to_string();
+        SettingsError::Unreadable {
+            key: (path != ".").then_some(path),
+            reason: e.into_inner().to_string(),
+        }
     })
 }
 

@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::Combine;
+use super::{Combine, SettingsError};
 use crate::guidance::teacher::TeacherFaults;
 
 /// `teacher_beta`: a rationality, or the word `rational` (a teacher that never errs by chance).
@@ -72,12 +72,12 @@ impl TeacherSection {
     }
 
     /// The teacher's faults, checked.
-    pub(super) fn faults(&self) -> Result<TeacherFaults, String> {
+    pub(super) fn faults(&self) -> Result<TeacherFaults, SettingsError> {
         teacher_faults(self)
     }
 }
 
-fn teacher_faults(s: &TeacherSection) -> Result<TeacherFaults, String> {
+fn teacher_faults(s: &TeacherSection) -> Result<TeacherFaults, SettingsError> {
     let faults = TeacherFaults {
         beta: match s.teacher_beta {
             None | Some(TeacherBeta::Rational(_)) => None,
@@ -97,9 +97,10 @@ fn teacher_faults(s: &TeacherSection) -> Result<TeacherFaults, String> {
             gamma: Some(g),
             ..TeacherFaults::default()
         }
-        .validate()?;
+        .validate()
+        .map_err(SettingsError::Teacher)?;
     }
-    faults.validate()?;
+    faults.validate().map_err(SettingsError::Teacher)?;
     Ok(faults)
 }
 
@@ -109,26 +110,38 @@ fn teacher_faults(s: &TeacherSection) -> Result<TeacherFaults, String> {
 pub(super) fn answers(
     k: Option<usize>,
     combine: Option<Combine>,
-) -> Result<(usize, Combine), String> {
+) -> Result<(usize, Combine), SettingsError> {
     let k = k.unwrap_or(1);
     if k == 0 {
-        return Err("answers_per_query: expected at least 1".into());
+        return Err(SettingsError::bad(
+            "answers_per_query",
+            "expected at least 1",
+        ));
     }
     if k > 32 {
-        return Err(format!("answers_per_query: at most 32, got {k}"));
+        return Err(SettingsError::bad(
+            "answers_per_query",
+            format!("at most 32, got {k}"),
+        ));
     }
     match (k, combine) {
         (1, None | Some(Combine::First)) => Ok((1, Combine::First)),
-        (1, Some(c)) => Err(format!(
-            "combine: {} combines several answers; set answers_per_query above 1, or combine first",
-            c.as_str()
+        (1, Some(c)) => Err(SettingsError::bad(
+            "combine",
+            format!(
+                "{} combines several answers; set answers_per_query above 1, or combine first",
+                c.as_str()
+            ),
         )),
-        (_, Some(Combine::First)) => Err(format!(
-            "combine: first takes one answer per query; with answers_per_query = {k} choose majority or mean (evaluative) or each (preference)"
+        (_, Some(Combine::First)) => Err(SettingsError::bad(
+            "combine",
+            format!(
+                "first takes one answer per query; with answers_per_query = {k} choose majority or mean (evaluative) or each (preference)"
+            ),
         )),
-        (_, None) => Err(format!(
-            "answers_per_query = {k} needs a combine rule: majority or mean (evaluative), each (preference)"
-        )),
+        (_, None) => Err(SettingsError::NoCombineRule {
+            answers_per_query: k,
+        }),
         (_, Some(c)) => Ok((k, c)),
     }
 }

@@ -136,7 +136,7 @@ fn error_lines() -> String {
     let drpl = |v: serde_json::Value| {
         read(v).and_then(|s| s.preference(Task::Reaching, QueryMethod::Drpl, 0))
     };
-    let cases: Vec<(&str, Result<(), String>)> = vec![
+    let cases: Vec<(&str, Result<(), SettingsError>)> = vec![
         ("unknown", read(json!({"no_such_key": 1})).map(drop)),
         ("type", read(json!({"pace_hz": "fast"})).map(drop)),
         (

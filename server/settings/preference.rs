@@ -2,6 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::SettingsError;
 use crate::guidance::drpl::acquisition::Acquisition;
 use crate::guidance::drpl::run::PreferenceRunConfig;
 
@@ -56,10 +57,16 @@ impl PreferenceSection {
     }
 
     /// Every setting given, checked, into `config`.
-    pub(super) fn apply(&self, config: &mut PreferenceRunConfig) -> Result<(), String> {
-        let at_least = |key: &str, v: Option<usize>, min: usize| -> Result<Option<usize>, String> {
+    pub(super) fn apply(&self, config: &mut PreferenceRunConfig) -> Result<(), SettingsError> {
+        let at_least = |key: &'static str,
+                        v: Option<usize>,
+                        min: usize|
+         -> Result<Option<usize>, SettingsError> {
             match v {
-                Some(n) if n < min => Err(format!("{key}: expected an integer >= {min}, got {n}")),
+                Some(n) if n < min => Err(SettingsError::bad(
+                    key,
+                    format!("expected an integer >= {min}, got {n}"),
+                )),
                 other => Ok(other),
             }
         };
@@ -83,7 +90,10 @@ impl PreferenceSection {
         ] {
             if let Some(x) = value {
                 if !x.is_finite() {
-                    return Err(format!("{key}: expected a finite number, got {x}"));
+                    return Err(SettingsError::bad(
+                        key,
+                        format!("expected a finite number, got {x}"),
+                    ));
                 }
                 *slot = x;
             }

@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::SettingsError;
 use crate::guidance::evaluative_run::{DEFAULT_CEILING, FeedbackCeiling, QueryRuleConfig};
 use crate::guidance::query_rule::UcbForm;
 
@@ -57,10 +58,13 @@ impl QueryRuleSection {
     }
 
     /// Every setting given, checked, into `rule`.
-    pub(super) fn apply(&self, rule: &mut QueryRuleConfig) -> Result<(), String> {
+    pub(super) fn apply(&self, rule: &mut QueryRuleConfig) -> Result<(), SettingsError> {
         if let Some(c) = self.c {
             if !c.is_finite() || c < 0.0 {
-                return Err(format!("c: expected a number >= 0, got {c}"));
+                return Err(SettingsError::bad(
+                    "c",
+                    format!("expected a number >= 0, got {c}"),
+                ));
             }
             rule.c = c;
         }
@@ -78,7 +82,7 @@ impl QueryRuleSection {
     }
 
     /// The product rule's window and ceiling (docs/dref.md), on any DREF: 0 switches either off.
-    fn apply_pacing(&self, rule: &mut QueryRuleConfig) -> Result<(), String> {
+    fn apply_pacing(&self, rule: &mut QueryRuleConfig) -> Result<(), SettingsError> {
         if let Some(w) = self.rank_window {
             rule.rank_window = w;
         }
@@ -96,8 +100,9 @@ impl QueryRuleSection {
                 });
             }
             Some(r) => {
-                return Err(format!(
-                    "max_feedback_rate: expected a share of steps in (0, 1], or 0 for no ceiling, got {r}"
+                return Err(SettingsError::bad(
+                    "max_feedback_rate",
+                    format!("expected a share of steps in (0, 1], or 0 for no ceiling, got {r}"),
                 ));
             }
         }
@@ -107,27 +112,32 @@ impl QueryRuleSection {
             (Some(0.0), None) => {}
             (Some(f), Some(c)) if f.is_finite() && f > 0.0 && f <= c.rate => c.floor = Some(f),
             (Some(f), Some(c)) => {
-                return Err(format!(
-                    "min_feedback_rate: expected a share of steps in (0, max_feedback_rate = {}], or 0 for a fixed rate, got {f}",
-                    c.rate
+                return Err(SettingsError::bad(
+                    "min_feedback_rate",
+                    format!(
+                        "expected a share of steps in (0, max_feedback_rate = {}], or 0 for a fixed rate, got {f}",
+                        c.rate
+                    ),
                 ));
             }
             (Some(_), None) => {
-                return Err(
-                    "min_feedback_rate: the rule has no ceiling; set max_feedback_rate too".into(),
-                );
+                return Err(SettingsError::bad(
+                    "min_feedback_rate",
+                    "the rule has no ceiling; set max_feedback_rate too",
+                ));
             }
         }
         if let Some(b) = self.feedback_burst {
             if b == 0 {
-                return Err("feedback_burst: expected at least 1".into());
+                return Err(SettingsError::bad("feedback_burst", "expected at least 1"));
             }
             match &mut rule.ceiling {
                 Some(c) => c.burst = b,
                 None => {
-                    return Err(
-                        "feedback_burst: the rule has no ceiling; set max_feedback_rate too".into(),
-                    );
+                    return Err(SettingsError::bad(
+                        "feedback_burst",
+                        "the rule has no ceiling; set max_feedback_rate too",
+                    ));
                 }
             }
         }

@@ -3,7 +3,7 @@
 //! and method family it belongs to. A family's check is "the other family's sections are
 //! empty": no list of names.
 
-use super::{EnvSection, Settings, keys};
+use super::{EnvSection, Family, Settings, SettingsError, keys};
 use crate::guidance::drpl::run::PreferenceRunConfig;
 use crate::guidance::drpl::selection::QueryMethod;
 use crate::guidance::evaluative_run::EvaluativeRunConfig;
@@ -12,16 +12,15 @@ use crate::sim::{EnvOptions, Task};
 
 impl Settings {
     /// The task's version alone (`dualrep sim`): refuses every setting but the env's.
-    pub fn env_options(&self, task: Task) -> Result<EnvOptions, String> {
+    pub fn env_options(&self, task: Task) -> Result<EnvOptions, SettingsError> {
         let env_only = Settings {
             env: self.env.clone(),
             ..Settings::default()
         };
         if &env_only != self {
-            return Err(format!(
-                "only the task's version can be set here: {}",
-                keys::of::<EnvSection>().join(", ")
-            ));
+            return Err(SettingsError::OnlyEnv {
+                allowed: keys::of::<EnvSection>(),
+            });
         }
         let mut options = EnvOptions::default();
         self.env.apply(&mut options, &task.into())?;
@@ -36,7 +35,7 @@ impl Settings {
         task: Task,
         method: EvaluativeMethod,
         seed: u64,
-    ) -> Result<EvaluativeRunConfig, String> {
+    ) -> Result<EvaluativeRunConfig, SettingsError> {
         self.apply_evaluative(EvaluativeRunConfig::new(task, method, seed))
     }
 
@@ -45,12 +44,13 @@ impl Settings {
     pub fn apply_evaluative(
         &self,
         mut config: EvaluativeRunConfig,
-    ) -> Result<EvaluativeRunConfig, String> {
+    ) -> Result<EvaluativeRunConfig, SettingsError> {
         if let Some(key) = keys::first_set(&self.preference) {
-            return Err(format!(
-                "{key} is a setting of preference methods (drpl, drpl-ss, fragment, full), not {}",
-                config.method
-            ));
+            return Err(SettingsError::WrongFamily {
+                key,
+                family: Family::Preference,
+                method: config.method.to_string(),
+            });
         }
         // The profile first: every setting given overrides its values.
         self.as_run.apply_profile(&mut config)?;
@@ -72,7 +72,7 @@ impl Settings {
         task: Task,
         method: QueryMethod,
         seed: u64,
-    ) -> Result<PreferenceRunConfig, String> {
+    ) -> Result<PreferenceRunConfig, SettingsError> {
         self.apply_preference(PreferenceRunConfig::new(task, method, seed))
     }
 
@@ -81,7 +81,7 @@ impl Settings {
     pub fn apply_preference(
         &self,
         mut config: PreferenceRunConfig,
-    ) -> Result<PreferenceRunConfig, String> {
+    ) -> Result<PreferenceRunConfig, SettingsError> {
         let evaluative_only = [
             keys::first_set(&self.sac),
             keys::first_set(&self.human_critic),
@@ -90,10 +90,11 @@ impl Settings {
             keys::first_set(&self.as_run),
         ];
         if let Some(key) = evaluative_only.into_iter().flatten().next() {
-            return Err(format!(
-                "{key} is a setting of evaluative methods (dref, ef-<p>, sac), not {}",
-                config.method.id()
-            ));
+            return Err(SettingsError::WrongFamily {
+                key,
+                family: Family::Evaluative,
+                method: config.method.id().to_string(),
+            });
         }
         self.preference.apply(&mut config)?;
         config.teacher = self.teacher.faults()?;

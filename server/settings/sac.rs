@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Deserializer, Serialize};
 
+use super::SettingsError;
 use crate::rl::{ActorMix, HumanCriticConfig, SacConfig};
 
 /// SAC's target entropy: SB3's `-dim(A)` ("auto") or a number.
@@ -115,10 +116,13 @@ impl SacSection {
     }
 
     /// Every setting given, checked, into `sac`.
-    pub(super) fn apply(&self, sac: &mut SacConfig) -> Result<(), String> {
+    pub(super) fn apply(&self, sac: &mut SacConfig) -> Result<(), SettingsError> {
         if let Some(h) = &self.hidden {
             if h.is_empty() || h.contains(&0) {
-                return Err(format!("hidden: expected positive layer sizes, got {h:?}"));
+                return Err(SettingsError::bad(
+                    "hidden",
+                    format!("expected positive layer sizes, got {h:?}"),
+                ));
             }
             sac.hidden = h.clone();
         }
@@ -139,7 +143,10 @@ impl SacSection {
             Some(TargetEntropy::Auto(_)) => sac.target_entropy = None,
             Some(TargetEntropy::Value(v)) if v.is_finite() => sac.target_entropy = Some(v),
             Some(TargetEntropy::Value(v)) => {
-                return Err(format!("target_entropy: expected a finite number, got {v}"));
+                return Err(SettingsError::bad(
+                    "target_entropy",
+                    format!("expected a finite number, got {v}"),
+                ));
             }
         }
         Ok(())
@@ -160,13 +167,16 @@ impl HumanCriticSection {
 
     /// Switches the critic on or off; any of its own settings switches it on (with defaults
     /// for the rest).
-    pub(super) fn apply(&self, sac: &mut SacConfig) -> Result<(), String> {
+    pub(super) fn apply(&self, sac: &mut SacConfig) -> Result<(), SettingsError> {
         if let Some(on) = self.human_critic {
             sac.human_critic = on.then(|| sac.human_critic.clone().unwrap_or_default());
         }
         if let Some(l) = self.lambda {
             if !(l.is_finite() && l >= 0.0) {
-                return Err(format!("lambda: expected a number >= 0, got {l}"));
+                return Err(SettingsError::bad(
+                    "lambda",
+                    format!("expected a number >= 0, got {l}"),
+                ));
             }
             critic(sac).lambda = l;
         }
@@ -185,32 +195,46 @@ fn critic(sac: &mut SacConfig) -> &mut HumanCriticConfig {
     sac.human_critic.get_or_insert_default()
 }
 
-pub(super) fn set_positive(slot: &mut f32, value: Option<f32>, key: &str) -> Result<(), String> {
+pub(super) fn set_positive(
+    slot: &mut f32,
+    value: Option<f32>,
+    key: &'static str,
+) -> Result<(), SettingsError> {
     match value {
         None => Ok(()),
         Some(v) if v.is_finite() && v > 0.0 => {
             *slot = v;
             Ok(())
         }
-        Some(v) => Err(format!("{key}: expected a positive number, got {v}")),
+        Some(v) => Err(SettingsError::bad(
+            key,
+            format!("expected a positive number, got {v}"),
+        )),
     }
 }
 
-fn set_unit(slot: &mut f32, value: Option<f32>, key: &str) -> Result<(), String> {
+fn set_unit(slot: &mut f32, value: Option<f32>, key: &'static str) -> Result<(), SettingsError> {
     match value {
         None => Ok(()),
         Some(v) if (0.0..=1.0).contains(&v) => {
             *slot = v;
             Ok(())
         }
-        Some(v) => Err(format!("{key}: expected a number in [0, 1], got {v}")),
+        Some(v) => Err(SettingsError::bad(
+            key,
+            format!("expected a number in [0, 1], got {v}"),
+        )),
     }
 }
 
-fn set_count(slot: &mut usize, value: Option<usize>, key: &str) -> Result<(), String> {
+fn set_count(
+    slot: &mut usize,
+    value: Option<usize>,
+    key: &'static str,
+) -> Result<(), SettingsError> {
     match value {
         None => Ok(()),
-        Some(0) => Err(format!("{key}: expected at least 1")),
+        Some(0) => Err(SettingsError::bad(key, "expected at least 1")),
         Some(n) => {
             *slot = n;
             Ok(())

@@ -3,8 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::Combine;
 use super::people;
+use super::{Combine, SettingsError};
 use crate::rl::kernels::KernelPath;
 
 /// A human session's control rate when the researcher does not set `pace_hz`: the robot's own.
@@ -96,27 +96,38 @@ impl SessionSection {
     }
 
     /// The values with defaults, checked.
-    pub(super) fn resolve(&self) -> Result<SessionSettings, String> {
-        let positive = |key: &str, v: Option<f64>, default: f64| -> Result<f64, String> {
-            match v {
-                None => Ok(default),
-                Some(x) if x.is_finite() && x > 0.0 => Ok(x),
-                Some(x) => Err(format!("{key}: expected a positive number, got {x}")),
-            }
-        };
+    pub(super) fn resolve(&self) -> Result<SessionSettings, SettingsError> {
+        let positive =
+            |key: &'static str, v: Option<f64>, default: f64| -> Result<f64, SettingsError> {
+                match v {
+                    None => Ok(default),
+                    Some(x) if x.is_finite() && x > 0.0 => Ok(x),
+                    Some(x) => Err(SettingsError::bad(
+                        key,
+                        format!("expected a positive number, got {x}"),
+                    )),
+                }
+            };
         let pace_hz = positive("pace_hz", self.pace_hz, DEFAULT_PACE_HZ)?;
         if pace_hz > 1000.0 {
-            return Err(format!("pace_hz: at most 1000, got {pace_hz}"));
+            return Err(SettingsError::bad(
+                "pace_hz",
+                format!("at most 1000, got {pace_hz}"),
+            ));
         }
-        let at_least_one = |key: &str, v: Option<u64>, default: u64| -> Result<u64, String> {
-            match v {
-                None => Ok(default),
-                Some(0) => Err(format!("{key}: expected at least 1")),
-                Some(n) => Ok(n),
-            }
-        };
+        let at_least_one =
+            |key: &'static str, v: Option<u64>, default: u64| -> Result<u64, SettingsError> {
+                match v {
+                    None => Ok(default),
+                    Some(0) => Err(SettingsError::bad(key, "expected at least 1")),
+                    Some(n) => Ok(n),
+                }
+            };
         if self.rerun_connect.as_deref() == Some("") {
-            return Err("rerun_connect: expected a viewer URL, got an empty string".into());
+            return Err(SettingsError::bad(
+                "rerun_connect",
+                "expected a viewer URL, got an empty string",
+            ));
         }
         let (answers_per_query, combine) = people::answers(self.answers_per_query, self.combine)?;
         Ok(SessionSettings {

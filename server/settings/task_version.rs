@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{Family, SceneGraphChoice};
+use super::{Family, SceneGraphChoice, SettingsError};
 use crate::scene_graph::SceneGraph;
 use crate::sim::{EnvOptions, GripObservation, PlacingSuccess, Start, Task, TaskRef, Variant};
 
@@ -57,11 +57,17 @@ impl SceneGraphSection {
     }
 
     /// The options given, checked against `graph`'s task, into `graph`.
-    pub(super) fn apply(&self, graph: &mut SceneGraph) -> Result<(), String> {
+    pub(super) fn apply(&self, graph: &mut SceneGraph) -> Result<(), SettingsError> {
         match (self.side_engines_on_a0, &mut *graph) {
             (None, _) => {}
             (Some(on), SceneGraph::LunarLander { side_engines_on_a0 }) => *side_engines_on_a0 = on,
-            (Some(_), _) => return Err("side_engines_on_a0 applies to lunar-lander only".into()),
+            (Some(_), _) => {
+                return Err(SettingsError::WrongTask {
+                    key: "side_engines_on_a0",
+                    applies_to: "lunar-lander only",
+                    task: None,
+                });
+            }
         }
         match (self.scene_graph, *graph) {
             (None, _) => Ok(()),
@@ -73,7 +79,11 @@ impl SceneGraphSection {
                 *graph = SceneGraph::PlacingAsRun;
                 Ok(())
             }
-            (Some(_), _) => Err("scene_graph applies to placing only".into()),
+            (Some(_), _) => Err(SettingsError::WrongTask {
+                key: "scene_graph",
+                applies_to: "placing only",
+                task: None,
+            }),
         }
     }
 }
@@ -93,11 +103,15 @@ impl EnvSection {
     }
 
     /// The settings given, checked against `task`, into `env`.
-    pub(super) fn apply(&self, env: &mut EnvOptions, task: &TaskRef) -> Result<(), String> {
+    pub(super) fn apply(&self, env: &mut EnvOptions, task: &TaskRef) -> Result<(), SettingsError> {
         let builtin = task.builtin();
-        let table_top_only = |key: &str| -> Result<(), String> {
+        let table_top_only = |key: &'static str| -> Result<(), SettingsError> {
             if !matches!(builtin, Some(Task::Reaching | Task::Placing)) {
-                Err(format!("{key} applies to reaching and placing, not {task}"))
+                Err(SettingsError::WrongTask {
+                    key,
+                    applies_to: "reaching and placing",
+                    task: Some(task.to_string()),
+                })
             } else {
                 Ok(())
             }
@@ -110,11 +124,15 @@ impl EnvSection {
             table_top_only("start")?;
             env.start = Some(s);
         }
-        let placing_only = |key: &str| -> Result<(), String> {
+        let placing_only = |key: &'static str| -> Result<(), SettingsError> {
             if builtin == Some(Task::Placing) {
                 Ok(())
             } else {
-                Err(format!("{key} applies to placing only, not {task}"))
+                Err(SettingsError::WrongTask {
+                    key,
+                    applies_to: "placing only",
+                    task: Some(task.to_string()),
+                })
             }
         };
         if let Some(s) = self.success {
@@ -128,7 +146,10 @@ impl EnvSection {
         if let Some(r) = self.release_at {
             placing_only("release_at")?;
             if !(-1.0..1.0).contains(&r) {
-                return Err(format!("release_at: expected a number in [-1, 1), got {r}"));
+                return Err(SettingsError::bad(
+                    "release_at",
+                    format!("expected a number in [-1, 1), got {r}"),
+                ));
             }
             env.release_at = r;
         }

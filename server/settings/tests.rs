@@ -9,7 +9,7 @@ use crate::rl::kernels::KernelPath;
 use crate::scene_graph::SceneGraph;
 use crate::sim::{GripObservation, PlacingSuccess, Variant};
 
-fn dref(task: Task, settings: &Settings) -> Result<EvaluativeRunConfig, String> {
+fn dref(task: Task, settings: &Settings) -> Result<EvaluativeRunConfig, SettingsError> {
     settings.evaluative(task, EvaluativeMethod::Dref, 0)
 }
 
@@ -44,8 +44,15 @@ fn pairs_read_json_where_it_is_json_and_text_elsewhere() {
 #[test]
 fn unknown_keys_and_wrong_types_are_refused_by_name() {
     let e = Settings::from_pairs([("no_such_key", "1")]).unwrap_err();
+    assert!(
+        matches!(&e, SettingsError::UnknownKey { key, .. } if key == "no_such_key"),
+        "{e:?}"
+    );
+    let e = e.to_string();
     assert!(e.contains("no_such_key") && e.contains("pace_hz"), "{e}");
     let e = Settings::from_json(json!({"pace_hz": "fast"})).unwrap_err();
+    assert_eq!(e.key(), Some("pace_hz"));
+    let e = e.to_string();
     assert!(e.contains("invalid type"), "{e}");
     assert!(Settings::from_pairs([("hidden", "64,x")]).is_err());
     assert!(Settings::from_pairs([("k", "-1")]).is_err());
@@ -80,7 +87,18 @@ fn evaluative_settings_reach_the_run() {
 fn settings_of_other_tasks_and_methods_are_refused() {
     let one = |v: serde_json::Value| Settings::from_json(v).unwrap();
     let e = dref(Task::Reaching, &one(json!({"trajectories": 10}))).unwrap_err();
-    assert!(e.contains("preference"), "{e}");
+    assert!(
+        matches!(
+            e,
+            SettingsError::WrongFamily {
+                key: "trajectories",
+                family: Family::Preference,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("preference"), "{e}");
     assert!(dref(Task::Reaching, &one(json!({"side_engines_on_a0": true}))).is_err());
     assert!(dref(Task::LunarLander, &one(json!({"side_engines_on_a0": true}))).is_ok());
     assert!(dref(Task::Reaching, &one(json!({"release_at": 0.9}))).is_err());
@@ -88,7 +106,7 @@ fn settings_of_other_tasks_and_methods_are_refused() {
     let e = one(json!({"c": 0.3}))
         .preference(Task::Reaching, QueryMethod::Drpl, 0)
         .unwrap_err();
-    assert!(e.contains("evaluative"), "{e}");
+    assert!(e.to_string().contains("evaluative"), "{e}");
     assert!(
         one(json!({"release_at": 0.9}))
             .preference(Task::Reaching, QueryMethod::Drpl, 0)
@@ -284,7 +302,7 @@ fn kernels_are_a_session_setting_and_nonsense_is_refused() {
     assert_eq!(Settings::default().session().unwrap().kernels, None);
     for bad in [json!({"kernels": "fast"}), json!({"kernels": 2})] {
         let err = Settings::from_json(bad.clone()).unwrap_err();
-        assert!(err.contains("kernels"), "{bad}: {err}");
+        assert!(err.to_string().contains("kernels"), "{bad}: {err}");
     }
 }
 
@@ -411,6 +429,7 @@ fn as_run_switches_are_checked_one_by_one() {
         Settings::from_pairs(pairs.iter().copied())
             .and_then(|s| s.evaluative(task, EvaluativeMethod::DrefAuthors, 0))
             .unwrap_err()
+            .to_string()
     };
     assert!(bad(&[("oracle_alpha0", "1.5")], Task::Reaching).contains("oracle_alpha0"));
     assert!(bad(&[("oracle_action_scale", "0")], Task::Reaching).contains("oracle_action_scale"));
@@ -427,7 +446,8 @@ fn as_run_switches_are_checked_one_by_one() {
     let pref = Settings::from_pairs([("time_limit", "terminal")])
         .unwrap()
         .preference(Task::Placing, QueryMethod::Drpl, 0)
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
     assert!(pref.contains("time_limit"), "{pref}");
 }
 
@@ -467,12 +487,14 @@ fn the_products_dref_and_the_authors_differ_only_in_their_three_switches() {
     let bad = Settings::from_pairs([("max_feedback_rate", "1.5")])
         .unwrap()
         .evaluative(Task::Placing, EvaluativeMethod::Dref, 0)
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
     assert!(bad.contains("max_feedback_rate"), "{bad}");
     let no_ceiling = Settings::from_pairs([("feedback_burst", "5")])
         .unwrap()
         .evaluative(Task::Placing, EvaluativeMethod::DrefAuthors, 0)
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
     assert!(no_ceiling.contains("no ceiling"), "{no_ceiling}");
     // An answer-driven rate: a floor under the ceiling, checked against it.
     let following =
@@ -490,7 +512,8 @@ fn the_products_dref_and_the_authors_differ_only_in_their_three_switches() {
     let above = Settings::from_pairs([("min_feedback_rate", "0.2")])
         .unwrap()
         .evaluative(Task::Placing, EvaluativeMethod::Dref, 0)
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
     assert!(above.contains("min_feedback_rate"), "{above}");
 }
 
@@ -511,7 +534,9 @@ fn the_silence_wake_is_a_setting_of_its_own_and_off_by_default() {
         (2000, 0)
     );
     assert_eq!(waking.query_rule.build().silent_steps(), Some(0));
-    let not_a_number = Settings::from_pairs([("wake_after", "soon")]).unwrap_err();
+    let not_a_number = Settings::from_pairs([("wake_after", "soon")])
+        .unwrap_err()
+        .to_string();
     assert!(not_a_number.contains("wake_after"), "{not_a_number}");
 }
 
@@ -522,6 +547,8 @@ fn the_keys_are_the_sections_fields_each_once() {
         assert!(!keys[..i].contains(key), "{key} is in two sections");
     }
     // The list the unknown-key error gives is this one.
-    let e = Settings::from_pairs([("no_such_key", "1")]).unwrap_err();
+    let e = Settings::from_pairs([("no_such_key", "1")])
+        .unwrap_err()
+        .to_string();
     assert!(e.ends_with(&format!("`{}`", keys.last().unwrap())), "{e}");
 }

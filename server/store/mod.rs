@@ -45,10 +45,11 @@ pub use datasets::DatasetRow;
 pub use episodes::EpisodeRow;
 pub use queries::{AnswerCounts, AnswerRow, CommitOutcome, QueryRow, SyntheticAnswer};
 pub use revisions::{ReanswerOutcome, UndoOutcome};
-pub use sessions::{NewSession, SessionRow, Status};
-pub use surveys::Survey;
+pub use sessions::{NewSession, SessionRow, Status, StoredSpecError};
+pub use surveys::{Survey, SurveyError};
 pub use trainers::{
-    AddTrainer, PersonAnswer, TrainerOrigin, TrainerRef, TrainerRow, VoteOutcome, check_name,
+    AddTrainer, NameError, PersonAnswer, TrainerOrigin, TrainerRef, TrainerRow, VoteOutcome,
+    check_name,
 };
 
 /// The database file inside the data dir.

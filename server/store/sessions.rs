@@ -93,11 +93,21 @@ fn json(text: &str) -> serde_json::Value {
     serde_json::from_str(text).unwrap_or(serde_json::Value::Null)
 }
 
+/// A stored session's `config` column that no longer reads as a spec.
+#[derive(Debug, thiserror::Error)]
+#[error("the stored config of session {id}: {error}")]
+pub struct StoredSpecError {
+    pub id: String,
+    pub error: serde_json::Error,
+}
+
 impl SessionRow {
     /// The session as launched (its `config` column).
-    pub fn spec(&self) -> std::result::Result<crate::session::SessionSpec, String> {
-        serde_json::from_value(self.config.clone())
-            .map_err(|e| format!("the stored config of session {}: {e}", self.id))
+    pub fn spec(&self) -> std::result::Result<crate::session::SessionSpec, StoredSpecError> {
+        serde_json::from_value(self.config.clone()).map_err(|error| StoredSpecError {
+            id: self.id.clone(),
+            error,
+        })
     }
 
     fn from_row(r: &SqliteRow) -> Self {

@@ -14,15 +14,26 @@ pub struct Survey {
     pub cognitive_ease: u8,
 }
 
+/// A survey answer out of its 1-to-5 scale.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{question} must be 1 to 5, got {value}")]
+pub struct SurveyError {
+    pub question: &'static str,
+    pub value: u8,
+}
+
 impl Survey {
-    pub fn validate(&self) -> std::result::Result<(), String> {
+    pub fn validate(&self) -> std::result::Result<(), SurveyError> {
         for (name, v) in [
             ("overall_experience", self.overall_experience),
             ("perceived_intelligence", self.perceived_intelligence),
             ("cognitive_ease", self.cognitive_ease),
         ] {
             if !(1..=5).contains(&v) {
-                return Err(format!("{name} must be 1 to 5, got {v}"));
+                return Err(SurveyError {
+                    question: name,
+                    value: v,
+                });
             }
         }
         Ok(())

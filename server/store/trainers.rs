@@ -105,14 +105,23 @@ pub struct PersonAnswer {
     pub answered_s: f64,
 }
 
+/// Why a trainer's name is refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum NameError {
+    #[error("a trainer's name has 1 to 40 characters")]
+    Length,
+    #[error("a trainer's name cannot hold control characters")]
+    ControlCharacter,
+}
+
 /// A trainer's name: what a person types, trimmed; 1 to 40 characters, no control characters.
-pub fn check_name(name: &str) -> std::result::Result<String, String> {
+pub fn check_name(name: &str) -> std::result::Result<String, NameError> {
     let name = name.trim();
     if name.is_empty() || name.chars().count() > 40 {
-        return Err("a trainer's name has 1 to 40 characters".into());
+        return Err(NameError::Length);
     }
     if name.chars().any(char::is_control) {
-        return Err("a trainer's name cannot hold control characters".into());
+        return Err(NameError::ControlCharacter);
     }
     Ok(name.to_string())
 }

@@ -58,12 +58,10 @@ pub async fn upgrade(
     // stored session that no longer reads gets no socket, rather than a made-up `hello`).
     let plan = match state.hub.session(&row.id) {
         Some(live) => live.plan.clone(),
-        None => match row
-            .spec()
-            .and_then(|spec| SessionPlan::new(spec).map_err(|e| e.0))
-        {
-            Ok(plan) => Arc::new(plan),
-            Err(reason) => return ApiError::Conflict(reason).into_response(),
+        None => match row.spec().map(SessionPlan::new) {
+            Ok(Ok(plan)) => Arc::new(plan),
+            Ok(Err(e)) => return ApiError::Conflict(e.to_string()).into_response(),
+            Err(e) => return ApiError::Conflict(e.to_string()).into_response(),
         },
     };
     ws.max_message_size(MAX_MESSAGE_BYTES)

@@ -5,6 +5,7 @@ use anyhow::{Context, bail};
 
 use super::progress::Progress;
 use super::{ReproduceArgs, dedup_keep_order, report};
+use crate::cli::arg_error::ArgError;
 use crate::report::grid::{DEFAULT_QUERIES, Figure};
 use crate::report::robustness::{DEFAULT_BETAS, DEFAULT_ERRORS, DEFAULT_STEPS, RobustnessConfig};
 use crate::report::runner::{RunStatus, Waiting, run_grid};
@@ -14,7 +15,7 @@ use crate::sim::Task;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Beta(pub Option<f64>);
 
-pub fn parse_beta(s: &str) -> Result<Beta, String> {
+pub fn parse_beta(s: &str) -> Result<Beta, ArgError> {
     match s.trim() {
         "rational" => Ok(Beta(None)),
         t => t
@@ -22,7 +23,7 @@ pub fn parse_beta(s: &str) -> Result<Beta, String> {
             .ok()
             .filter(|b| b.is_finite() && *b >= 0.0)
             .map(|b| Beta(Some(b)))
-            .ok_or_else(|| format!("{s:?}: expected a rationality >= 0 or `rational`")),
+            .ok_or_else(|| ArgError::Beta(s.to_string())),
     }
 }
 
@@ -84,7 +85,7 @@ fn config(args: &ReproduceArgs) -> anyhow::Result<RobustnessConfig> {
         sets: args.sets.clone(),
         out: args.out.clone(),
     };
-    config.validate().map_err(anyhow::Error::msg)?;
+    config.validate()?;
     Ok(config)
 }
 
