@@ -13,9 +13,9 @@ use super::events::{
     AnswerValue, Controls, Ending, Halt, Observer, Revision, SessionEvent, SessionSink,
     StoredRevision,
 };
+use super::plan::RunConfig;
 use super::plan::SessionPlan;
 use super::remote::RemoteSession;
-use super::spec::RunConfig;
 use super::{evaluative_loop, preference_loop};
 
 /// Everything a session thread gets besides its plan.

@@ -1,24 +1,20 @@
 //! What a session is: task, method, trainer kind, seed, budget and parameters, as launched over
-//! REST and stored (as JSON) with the session. Validation happens here, once, so that a session
-//! that was accepted can always be built again on resume.
+//! REST and stored (as JSON) with the session. It is read and checked once, into a
+//! [`SessionPlan`](super::plan::SessionPlan), so that a session that was accepted can always be
+//! built again on resume.
 
 use std::fmt;
 use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
-use crate::guidance::drpl::run::PreferenceRunConfig;
 use crate::guidance::drpl::selection::QueryMethod;
-use crate::guidance::evaluative_run::EvaluativeRunConfig;
 use crate::guidance::feedback_schedule::EvaluativeMethod;
-use crate::guidance::human_pace::{HumanPace, PEOPLE_QUERIES_PER_MINUTE};
-use crate::remote_env::{RemoteDescription, RemoteTarget};
-use crate::scene_graph::SceneGraph;
-use crate::settings::{Settings, SettingsError};
-use crate::sim::{DeclaredTask, Task};
+use crate::remote_env::RemoteTarget;
+use crate::settings::Settings;
+use crate::sim::Task;
 
 use super::events::QueryKind;
-use super::plan::PlanError;
 
 pub use crate::settings::{
     DEFAULT_ANSWER_TIMEOUT_S, DEFAULT_CHECKPOINT_EVERY, DEFAULT_CLIP_FRAMES, DEFAULT_ENV_TIMEOUT_S,
@@ -131,139 +127,20 @@ pub struct SessionSpec {
     pub params: Settings,
 }
 
-/// The algorithm's configuration, built from the spec.
-#[derive(Clone, Debug)]
-pub enum RunConfig {
-    Evaluative(EvaluativeRunConfig),
-    Preference(PreferenceRunConfig),
-}
-
-impl RunConfig {
-    /// The scene graph the session's queries are phrased in (its `side_engines_on_a0` override
-    /// included).
-    pub fn scene_graph(&self) -> SceneGraph {
-        match self {
-            RunConfig::Evaluative(c) => c.scene_graph,
-            RunConfig::Preference(c) => c.scene_graph,
-        }
-    }
-}
-
 impl SessionSpec {
     /// The task's name as the store and the API show it: ours, or `remote` for a remote env's
     /// own task.
     pub fn task_name(&self) -> &'static str {
         self.task.map_or(REMOTE_TASK, Task::id)
     }
-
-    /// The algorithm's configuration with every setting applied, on a remote env that described
-    /// itself as `declared` (used when the spec has no task of ours). A remote env's own task is
-    /// known only once it is reached: until then (validation) its predicates are none.
-    pub(super) fn run_config_on(
-        &self,
-        declared: Option<&RemoteDescription>,
-    ) -> Result<RunConfig, PlanError> {
-        let (task, graph, max_steps) = match (self.task, declared) {
-            (Some(task), _) => {
-                return Ok(match self.method {
-                    SessionMethod::Evaluative(method) => RunConfig::Evaluative(
-                        self.paced_for_people(self.params.evaluative(task, method, self.seed)?)?,
-                    ),
-                    SessionMethod::Preference(method) => {
-                        RunConfig::Preference(self.params.preference(task, method, self.seed)?)
-                    }
-                });
-            }
-            (None, Some(d)) => (
-                d.declared_task(),
-                d.graph,
-                d.spec.max_episode_steps as usize,
-            ),
-            (None, None) => (DeclaredTask::default(), SceneGraph::Declared(&[]), 1000),
-        };
-        Ok(match self.method {
-            SessionMethod::Evaluative(method) => {
-                RunConfig::Evaluative(self.paced_for_people(self.params.apply_evaluative(
-                    EvaluativeRunConfig::declared(task, graph, method, self.seed),
-                )?)?)
-            }
-            SessionMethod::Preference(method) => {
-                RunConfig::Preference(self.params.apply_preference(
-                    PreferenceRunConfig::declared(task, graph, method, self.seed, max_steps),
-                )?)
-            }
-        })
-    }
-
-    /// A DREF session answered by a person asks at a person's pace unless the launch set one
-    /// (`max_queries_per_minute`, 0 for none): the rule's ceiling is a share of steps, and a
-    /// person answers fewer a minute than a fast robot takes steps. Synthetic trainers and EF
-    /// (whose schedule is its definition) keep the rule's own pace.
-    fn paced_for_people(
-        &self,
-        mut config: EvaluativeRunConfig,
-    ) -> Result<EvaluativeRunConfig, SettingsError> {
-        let unset = self.params.evaluative.max_queries_per_minute.is_none();
-        if self.trainer == TrainerKind::Human && config.method == EvaluativeMethod::Dref && unset {
-            let pace_hz = self.params.session()?.pace_hz;
-            config.human_pace = Some(HumanPace::new(PEOPLE_QUERIES_PER_MINUTE, pace_hz));
-        }
-        Ok(config)
-    }
-
-    /// The budget and where the env is. A remote env is not reached here: it may start later
-    /// than the session is queued.
-    pub(super) fn check_outline(&self) -> Result<(), PlanError> {
-        if self.budget == 0 {
-            return Err(PlanError::NoBudget);
-        }
-        if self.budget > 10_000_000 {
-            return Err(PlanError::BudgetTooLarge(self.budget));
-        }
-        match (&self.env, self.task) {
-            (None, None) => return Err(PlanError::NoTask),
-            (Some(env), _) => env.validate().map_err(PlanError::Env)?,
-            (None, Some(_)) => {}
-        }
-        if self.env.is_none() && self.params.session.env_timeout_s.is_some() {
-            return Err(PlanError::EnvTimeoutWithoutEnv);
-        }
-        Ok(())
-    }
-
-    /// Who answers, against how the answers combine and whether the teacher has faults.
-    pub(super) fn check_people(
-        &self,
-        settings: &SessionSettings,
-        run: &RunConfig,
-    ) -> Result<(), PlanError> {
-        let kind = self.method.query_kind();
-        if !settings.combine.fits(kind) {
-            return Err(PlanError::CombineDoesNotFit {
-                combine: settings.combine,
-                kind,
-            });
-        }
-        if settings.answers_per_query > 1 && self.trainer != TrainerKind::Human {
-            return Err(PlanError::SeveralAnswersNeedPeople(
-                settings.answers_per_query,
-            ));
-        }
-        let teacher = match run {
-            RunConfig::Evaluative(c) => &c.teacher,
-            RunConfig::Preference(c) => &c.teacher,
-        };
-        if !teacher.is_perfect() && self.trainer == TrainerKind::Human {
-            return Err(PlanError::FaultsOnPeople);
-        }
-        Ok(())
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::session::plan::SessionPlan;
+    use crate::guidance::human_pace::{HumanPace, PEOPLE_QUERIES_PER_MINUTE};
+    use crate::session::plan::{PlanError, RunConfig, SessionPlan};
+    use crate::settings::SettingsError;
     use serde_json::json;
 
     fn spec(method: &str, params: serde_json::Value) -> SessionSpec {
