@@ -17,7 +17,8 @@ use crate::sim::{Env, EnvOptions, Task};
 
 use super::error::{ExpertError, SessionError};
 use super::events::{
-    AnswerValue, Controls, Observer, QueryKind, Revision, SessionEvent, SessionSink, StoredRevision,
+    AnswerValue, Controls, Halt, Observer, QueryKind, Revision, SessionEvent, SessionSink,
+    StoredRevision,
 };
 use super::query::{self, FrameHistory, QueryContent, QueryData, SegmentData};
 use super::remote::{Reconnect, StoredMoment};
@@ -204,6 +205,13 @@ impl Asker {
     fn answered(&mut self, step: u64, seq: u64, value: AnswerValue) -> AnswerValue {
         self.observe(|o| o.answer(step, seq, value));
         value
+    }
+
+    /// How the session ends when its last query was aborted ([`Asker::aborted`]; a shutdown
+    /// if no halt came): nobody gave that answer. `None` if it was not.
+    pub(super) fn abort_halt(&self) -> Option<Halt> {
+        self.aborted
+            .then(|| self.controls.halted().unwrap_or(Halt::Shutdown))
     }
 
     pub(super) fn replaying(&self) -> bool {

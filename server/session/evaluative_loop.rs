@@ -4,23 +4,24 @@
 //! a remote env it continues from the latest run checkpoint and catches up on the answers
 //! stored after it (module `remote`).
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use super::asker::{Asker, EvaluativeAsker, Judge, load_expert, load_task_expert};
 use super::error::SessionError;
 use super::events::{
     AnswerValue, Checkpoint, Ending, Frame, Halt, Observer, SessionEvent, SessionSink,
 };
+use super::pacing::{Pacer, ProgressReports};
 use super::query::FrameHistory;
 use super::remote::{CheckpointRule, QueryNumbering, RemoteSession, ResumeNotes};
 use super::runner::{SessionContext, check_replay, halt_ending, revised};
 use super::spec::{SessionSettings, SessionSpec, TrainerKind};
-use crate::guidance::evaluative_run::{EvaluativeRun, EvaluativeRunConfig};
+use crate::guidance::evaluative_run::{EvaluativeRun, EvaluativeRunConfig, StepReport};
 use crate::guidance::evaluative_trainer::{Evaluation, NoTrainer};
 use crate::guidance::expert_oracle::{ExpertOracle, OracleRule};
 use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::rl::Sac;
-use crate::sim::TaskRef;
+use crate::sim::{EnvFault, Geometry, RenderState, TaskRef};
 
 /// How often a running session reports its progress.
 const PROGRESS_EVERY: Duration = Duration::from_millis(250);
@@ -55,12 +56,6 @@ fn expert(ctx: &SessionContext, task: &TaskRef) -> Result<Sac, SessionError> {
             }
         },
     })
-}
-
-/// The remote part of a session: its run checkpoints and query numbering.
-struct Resumable {
-    rule: CheckpointRule,
-    numbering: QueryNumbering,
 }
 
 pub(super) fn run(
@@ -110,8 +105,14 @@ pub(super) fn run(
         asker: Asker::start(ctx, observer, graph),
         judge,
     };
-    let (run, resumable, episode) = match remote {
-        None => (EvaluativeRun::new(config, spec.budget), None, 0),
+    let (run, checkpoints, episode) = match remote {
+        None => {
+            let checkpoints = Checkpoints::Replayable {
+                verify,
+                every: settings.checkpoint_every,
+            };
+            (EvaluativeRun::new(config, spec.budget), checkpoints, 0)
+        }
         Some(r) => {
             let RemoteSession {
                 mut env,
@@ -138,183 +139,279 @@ pub(super) fn run(
                 .asker
                 .continue_at(numbering.next, stored_queries, run.steps(), stored_moments);
             let rule = CheckpointRule::new(settings.checkpoint_every, run.steps(), human);
-            (run, Some(Resumable { rule, numbering }), episode)
+            (
+                run,
+                Checkpoints::RemoteResumable { rule, numbering },
+                episode,
+            )
         }
     };
-    drive(spec, settings, run, trainer, verify, resumable, episode)
+    let views = StepViews::start(&run, &mut trainer, episode);
+    drive(
+        spec.budget,
+        run,
+        trainer,
+        views,
+        checkpoints,
+        Pacer::new(settings.pace_hz),
+    )
 }
 
+/// The session's loop around [`EvaluativeRun::try_step`]: one env step, a query if the run
+/// asks, one learning step, per tick.
 fn drive(
-    spec: &SessionSpec,
-    settings: SessionSettings,
+    budget: u64,
     mut run: EvaluativeRun,
     mut trainer: EvaluativeAsker,
-    verify: Option<(u64, String)>,
-    mut resumable: Option<Resumable>,
-    first_episode: u64,
+    mut views: StepViews,
+    mut checkpoints: Checkpoints,
+    mut pacer: Pacer,
 ) -> Result<Ending, SessionError> {
-    let human = spec.trainer == TrainerKind::Human;
     let sink = trainer.asker.sink.clone();
-    if let Judge::Human { history, .. } = &mut trainer.judge {
-        history.start_episode(run.env().geometry(), run.env().render());
-    }
-    if let Some(o) = trainer.asker.observer.as_deref_mut() {
-        o.episode_start(first_episode, run.steps(), &run.env().geometry());
-    }
-    let period = Duration::from_secs_f64(1.0 / settings.pace_hz);
-    let mut next_tick = Instant::now();
-    let mut last_progress = Instant::now();
-    // The first frame a browser can see carries the geometry, as every episode's first does
-    // (after a resume, that is the first frame after the replay).
-    let (mut episode, mut episode_return, mut need_geometry) = (first_episode, 0.0f64, true);
-    // The geometry of the episode being played (the env's is the next one's at an episode end).
-    let mut episode_geometry = run.env().geometry();
-    while run.steps() < spec.budget {
+    let mut progress = ProgressReports::every(PROGRESS_EVERY);
+    while run.steps() < budget {
         if let Some(h) = trainer.asker.controls.poll() {
-            return Ok(end_evaluative(h, &run, sink.as_ref(), false));
+            return Ok(end_early(h, &run, sink.as_ref(), false));
         }
-        for r in trainer.asker.due_revisions(run.steps()) {
-            let label = r.value.and_then(AnswerValue::as_evaluation);
-            // A remote session's run may have lost the query with an episode.
-            let query = match &resumable {
-                Some(x) => x.numbering.run_query(r.seq),
-                None => Some(r.seq as usize),
-            };
-            if let Some(q) = query {
-                run.relabel(q, label.unwrap_or(Evaluation::NoFeedback));
-            }
-            sink.send(revised(r, run.steps()));
+        apply_revisions(&mut run, &mut trainer.asker, &checkpoints);
+        // The algorithm's step: act, ask if the rule says so, store, learn.
+        let report = run
+            .try_step(&mut trainer)
+            .map_err(|fault| env_failed(&run, sink.as_ref(), fault))?;
+        if let Some(h) = trainer.asker.abort_halt() {
+            return Ok(end_early(h, &run, sink.as_ref(), true));
         }
-        let report = run.try_step(&mut trainer).map_err(|fault| {
-            // The progress the session ends with is the step its reason names, not the last
-            // one reported on the timer.
-            sink.send(SessionEvent::Progress {
-                progress: run.steps(),
-            });
-            SessionError::EnvAtStep {
-                step: run.steps(),
-                fault,
-            }
-        })?;
-        if trainer.asker.aborted {
-            let h = trainer.asker.controls.halted().unwrap_or(Halt::Shutdown);
-            return Ok(end_evaluative(h, &run, sink.as_ref(), true));
+        let live = trainer.live();
+        views.show(&run, &mut trainer, report, live);
+        checkpoints.after_step(&run, &mut trainer, views.episode)?;
+        progress.tick(sink.as_ref(), run.steps());
+        if live && let Some(h) = pacer.wait(&mut trainer.asker.controls) {
+            return Ok(end_early(h, &run, sink.as_ref(), false));
         }
-        episode_return += f64::from(report.reward);
-        if let Some(o) = trainer.asker.observer.as_deref_mut() {
-            let step = run.steps() - 1;
-            let state = report
-                .final_state
-                .clone()
-                .unwrap_or_else(|| run.env().render());
-            // At an episode's end `run` has already counted its return.
-            let cumulative = run.cumulative_return()
-                + if report.episode.is_some() {
-                    0.0
-                } else {
-                    episode_return
-                };
-            o.step(
-                step,
-                episode,
-                &state,
-                report.reward,
-                cumulative,
-                report.abstract_state,
-            );
-            if report.episode.is_some() {
-                o.episode_start(episode + 1, run.steps(), &run.env().geometry());
-            }
+    }
+    ProgressReports::now(sink.as_ref(), run.steps());
+    sink.send(SessionEvent::Checkpoint(evaluative_checkpoint(&run)));
+    Ok(Ending::Finished)
+}
+
+/// Takes in the undos and new answers due now: the run relabels the queries they revise.
+fn apply_revisions(run: &mut EvaluativeRun, asker: &mut Asker, checkpoints: &Checkpoints) {
+    for r in asker.due_revisions(run.steps()) {
+        let label = r.value.and_then(AnswerValue::as_evaluation);
+        if let Some(q) = checkpoints.run_query(r.seq) {
+            run.relabel(q, label.unwrap_or(Evaluation::NoFeedback));
         }
-        // Catching up on stored answers after a resume: no frames, no pacing.
-        let live = human && !trainer.asker.replaying();
+        asker.sink.send(revised(r, run.steps()));
+    }
+}
+
+/// The env failed in a step: the session ends with the step it failed at as its progress (the
+/// step its reason names, not the last one reported on the timer).
+fn env_failed(run: &EvaluativeRun, sink: &dyn SessionSink, fault: EnvFault) -> SessionError {
+    ProgressReports::now(sink, run.steps());
+    SessionError::EnvAtStep {
+        step: run.steps(),
+        fault,
+    }
+}
+
+impl EvaluativeAsker {
+    /// Whether people watch this step: a human session, not catching up on stored answers
+    /// after a resume (which shows no frames and is not paced).
+    fn live(&self) -> bool {
+        matches!(self.judge, Judge::Human { .. }) && !self.asker.replaying()
+    }
+}
+
+/// What people and the recording see of the steps: the observer's steps and episodes, the
+/// human judge's frame history (the clips its queries show), frames to browsers, and the
+/// episode counters they are numbered and summed with. Kept apart from the loop so that the
+/// step reads plainly there; none of it feeds back into the run.
+struct StepViews {
+    /// The episode being played (episodes finished, counting those before a resume).
+    episode: u64,
+    episode_return: f64,
+    /// The first frame a browser can see carries the geometry, as every episode's first does
+    /// (after a resume, that is the first frame after the replay).
+    need_geometry: bool,
+    /// The geometry of the episode being played (the env's is the next one's at an episode end).
+    episode_geometry: Geometry,
+}
+
+impl StepViews {
+    /// Starts showing the run as it is now, in episode `episode`: the judge's history and the
+    /// recording start an episode.
+    fn start(run: &EvaluativeRun, trainer: &mut EvaluativeAsker, episode: u64) -> Self {
         if let Judge::Human { history, .. } = &mut trainer.judge {
-            // At an episode's end the env has already reset: show the state it ended in.
-            let state = report
+            history.start_episode(run.env().geometry(), run.env().render());
+        }
+        if let Some(o) = trainer.asker.observer.as_deref_mut() {
+            o.episode_start(episode, run.steps(), &run.env().geometry());
+        }
+        Self {
+            episode,
+            episode_return: 0.0,
+            need_geometry: true,
+            episode_geometry: run.env().geometry(),
+        }
+    }
+
+    /// Shows the step just taken: to the recording, to the judge's history, as a frame to
+    /// browsers when `live`, and its episode's end if it ended one.
+    fn show(
+        &mut self,
+        run: &EvaluativeRun,
+        trainer: &mut EvaluativeAsker,
+        report: StepReport,
+        live: bool,
+    ) {
+        self.episode_return += f64::from(report.reward);
+        // At an episode's end the env has already reset: show the state it ended in.
+        let state = || {
+            report
                 .final_state
                 .clone()
-                .unwrap_or_else(|| run.env().render());
+                .unwrap_or_else(|| run.env().render())
+        };
+        if let Some(o) = trainer.asker.observer.as_deref_mut() {
+            self.record(o, run, &report, state());
+        }
+        if let Judge::Human { history, .. } = &mut trainer.judge {
+            let state = state();
             if report.episode.is_some() {
                 history.start_episode(run.env().geometry(), run.env().render());
             } else {
                 history.push(state.clone());
             }
             if live {
-                sink.send(SessionEvent::Frame(Box::new(Frame {
-                    step: run.steps(),
-                    episode,
-                    state,
-                    geometry: std::mem::take(&mut need_geometry).then(|| episode_geometry.clone()),
-                    reward: report.reward,
-                    episode_return,
-                })));
+                trainer.asker.sink.send(self.frame(run, &report, state));
             }
-        }
-        if report.episode.is_some() {
-            need_geometry = true;
-            episode_geometry = run.env().geometry();
         }
         if let Some(e) = report.episode {
-            sink.send(SessionEvent::Episode(e));
-            episode += 1;
-            episode_return = 0.0;
+            self.need_geometry = true;
+            self.episode_geometry = run.env().geometry();
+            trainer.asker.sink.send(SessionEvent::Episode(e));
+            self.episode += 1;
+            self.episode_return = 0.0;
         }
-        match &mut resumable {
-            None => {
-                check_replay(&verify, run.steps(), || learner_digest(&run))?;
-                if run.steps().is_multiple_of(settings.checkpoint_every) {
-                    sink.send(SessionEvent::Checkpoint(evaluative_checkpoint(&run)));
+    }
+
+    fn record(
+        &self,
+        o: &mut dyn Observer,
+        run: &EvaluativeRun,
+        report: &StepReport,
+        state: RenderState,
+    ) {
+        // At an episode's end `run` has already counted its return.
+        let cumulative = run.cumulative_return()
+            + if report.episode.is_some() {
+                0.0
+            } else {
+                self.episode_return
+            };
+        let step = run.steps() - 1;
+        o.step(
+            step,
+            self.episode,
+            &state,
+            report.reward,
+            cumulative,
+            report.abstract_state,
+        );
+        if report.episode.is_some() {
+            o.episode_start(self.episode + 1, run.steps(), &run.env().geometry());
+        }
+    }
+
+    fn frame(
+        &mut self,
+        run: &EvaluativeRun,
+        report: &StepReport,
+        state: RenderState,
+    ) -> SessionEvent {
+        let geometry =
+            std::mem::take(&mut self.need_geometry).then(|| self.episode_geometry.clone());
+        SessionEvent::Frame(Box::new(Frame {
+            step: run.steps(),
+            episode: self.episode,
+            state,
+            geometry,
+            reward: report.reward,
+            episode_return: self.episode_return,
+        }))
+    }
+}
+
+/// When a session checkpoints, by how it resumes.
+enum Checkpoints {
+    /// On our simulator a resume replays the stored answers from step 0: the replay is checked
+    /// against the checkpoint it resumes from (`verify`), and the learner is kept every `every`
+    /// steps.
+    Replayable {
+        verify: Option<(u64, String)>,
+        every: u64,
+    },
+    /// A remote env cannot replay: the whole run is kept at episode starts, as `rule` says,
+    /// with the numbering of the session's queries among the run's (module `remote`).
+    RemoteResumable {
+        rule: CheckpointRule,
+        numbering: QueryNumbering,
+    },
+}
+
+impl Checkpoints {
+    /// The run's query index of session query `seq` (`None`: a remote session's run lost it
+    /// with an episode).
+    fn run_query(&self, seq: u64) -> Option<usize> {
+        match self {
+            Checkpoints::Replayable { .. } => Some(seq as usize),
+            Checkpoints::RemoteResumable { numbering, .. } => numbering.run_query(seq),
+        }
+    }
+
+    /// After a step, in episode `episode`: checks the replay or settles the catch-up, and
+    /// checkpoints if one is due.
+    fn after_step(
+        &mut self,
+        run: &EvaluativeRun,
+        trainer: &mut EvaluativeAsker,
+        episode: u64,
+    ) -> Result<(), SessionError> {
+        match self {
+            Checkpoints::Replayable { verify, every } => {
+                check_replay(verify, run.steps(), || learner_digest(run))?;
+                if run.steps().is_multiple_of(*every) {
+                    let c = evaluative_checkpoint(run);
+                    trainer.asker.sink.send(SessionEvent::Checkpoint(c));
                 }
             }
-            Some(x) => {
+            Checkpoints::RemoteResumable { rule, numbering } => {
                 trainer.asker.settle_catch_up(run.steps());
-                x.numbering.lost.extend(trainer.asker.take_lost());
+                numbering.lost.extend(trainer.asker.take_lost());
                 if trainer.asker.take_answered() {
-                    x.rule.answered();
+                    rule.answered();
                 }
-                if run.at_episode_start() && x.rule.due(run.steps()) {
-                    x.numbering.next = trainer.asker.seq;
+                if run.at_episode_start() && rule.due(run.steps()) {
+                    numbering.next = trainer.asker.seq;
                     let notes = ResumeNotes {
-                        numbering: x.numbering.clone(),
+                        numbering: numbering.clone(),
                         episode,
                     };
                     let notes = serde_json::to_value(notes).expect("notes serialise");
-                    let mut c = evaluative_checkpoint(&run);
-                    c.resume = Some(run.checkpoint(&trainer, notes));
-                    sink.send(SessionEvent::Checkpoint(c));
+                    let mut c = evaluative_checkpoint(run);
+                    c.resume = Some(run.checkpoint(trainer, notes));
+                    trainer.asker.sink.send(SessionEvent::Checkpoint(c));
                 }
             }
         }
-        if last_progress.elapsed() >= PROGRESS_EVERY {
-            last_progress = Instant::now();
-            sink.send(SessionEvent::Progress {
-                progress: run.steps(),
-            });
-        }
-        if live {
-            next_tick += period;
-            let now = Instant::now();
-            if next_tick > now {
-                if let Some(h) = trainer.asker.controls.sleep(next_tick - now) {
-                    return Ok(end_evaluative(h, &run, sink.as_ref(), false));
-                }
-            } else {
-                // Running behind (a slow update or a long wait for an answer): go on at the
-                // pace from here rather than catching up in a burst.
-                next_tick = now;
-            }
-        }
+        Ok(())
     }
-    sink.send(SessionEvent::Progress {
-        progress: run.steps(),
-    });
-    sink.send(SessionEvent::Checkpoint(evaluative_checkpoint(&run)));
-    Ok(Ending::Finished)
 }
 
 /// Leave early: on shutdown, checkpoint first unless the last step used an answer nobody gave
 /// (a replay could not reproduce it; the previous checkpoint stands).
-fn end_evaluative(h: Halt, run: &EvaluativeRun, sink: &dyn SessionSink, aborted: bool) -> Ending {
+fn end_early(h: Halt, run: &EvaluativeRun, sink: &dyn SessionSink, aborted: bool) -> Ending {
     if h == Halt::Shutdown && !aborted {
         sink.send(SessionEvent::Checkpoint(evaluative_checkpoint(run)));
     }

@@ -11,6 +11,8 @@
 //!   trainer; the observer sees every query and answer.
 //! - `runner`: runs the plan; `evaluative_loop` and `preference_loop` drive it:
 //!   pacing, frames, asking, replaying stored answers, checkpoints.
+//! - `pacing`: what both loops keep besides the algorithm: the pace people watch a session
+//!   at, and how often it reports its progress.
 //! - `remote`: a session on an env in another process, which resumes from its latest
 //!   checkpoint instead of replaying from step 0.
 
@@ -19,6 +21,7 @@ pub mod combine;
 mod error;
 mod evaluative_loop;
 pub mod events;
+mod pacing;
 pub mod plan;
 mod preference_loop;
 pub mod query;

@@ -4,7 +4,8 @@
 
 use super::asker::{Asker, ClipEnv, Comparer, PreferenceAsker};
 use super::error::SessionError;
-use super::events::{AnswerValue, Checkpoint, Ending, Halt, Observer, SessionEvent};
+use super::events::{AnswerValue, Checkpoint, Ending, Observer, SessionEvent};
+use super::pacing::ProgressReports;
 use super::remote::RemoteSession;
 use super::runner::{SessionContext, check_replay, digest, halt_ending, revised};
 use super::spec::{SessionSpec, TrainerKind};
@@ -119,7 +120,12 @@ pub(super) fn run(
             graph,
         }
     };
-    drive(spec, run, PreferenceAsker { asker, comparer }, verify)
+    drive(
+        spec.budget,
+        run,
+        PreferenceAsker { asker, comparer },
+        verify,
+    )
 }
 
 /// The recorded trajectories with the run's config before them (a u64 LE length, the config as
@@ -153,39 +159,32 @@ fn kept_trajectories(
     trajectory_bytes::from_bytes(trajectories).map_err(|e| bad(&e))
 }
 
+/// The session's loop around [`PreferenceRun::step`]: pick a pair, ask, update the belief,
+/// query after query.
 fn drive(
-    spec: &SessionSpec,
+    budget: u64,
     mut run: PreferenceRun,
     mut trainer: PreferenceAsker,
     verify: Option<(u64, String)>,
 ) -> Result<Ending, SessionError> {
     let sink = trainer.asker.sink.clone();
-    while (run.queries() as u64) < spec.budget {
+    let mut progress = ProgressReports::every_step();
+    while (run.queries() as u64) < budget {
         if let Some(h) = trainer.asker.controls.poll() {
             // Between queries the posterior is whole: keep it (a stopped session's too, so its
             // posterior can be exported).
             sink.send(SessionEvent::Checkpoint(preference_checkpoint(&run)));
             return Ok(halt_ending(h));
         }
-        let progress = run.queries() as u64;
-        for r in trainer.asker.due_revisions(progress) {
-            let preference = r.value.and_then(AnswerValue::as_preference);
-            run.revise(r.seq as usize, preference.unwrap_or(Preference::Skip));
-            sink.send(revised(r, progress));
-            sink.send(SessionEvent::Alignment {
-                queries: progress,
-                alignment: run.alignment(),
-                alignment_of_mean: run.alignment_of_mean(),
-            });
-        }
+        apply_revisions(&mut run, &mut trainer.asker);
+        // The algorithm's step: pick a pair, ask, update the belief.
         let Some(report) = run.step(&mut trainer) else {
             break; // the method has no new pair left
         };
         if let Some(reason) = trainer.asker.fault.take() {
             return Err(reason);
         }
-        if trainer.asker.aborted {
-            let h = trainer.asker.controls.halted().unwrap_or(Halt::Shutdown);
+        if let Some(h) = trainer.asker.abort_halt() {
             return Ok(halt_ending(h));
         }
         sink.send(SessionEvent::Alignment {
@@ -193,13 +192,27 @@ fn drive(
             alignment: report.alignment,
             alignment_of_mean: report.alignment_of_mean,
         });
-        sink.send(SessionEvent::Progress {
-            progress: run.queries() as u64,
-        });
+        progress.tick(sink.as_ref(), run.queries() as u64);
         check_replay(&verify, run.queries() as u64, || {
             preference_checkpoint(&run).digest
         })?;
     }
     sink.send(SessionEvent::Checkpoint(preference_checkpoint(&run)));
     Ok(Ending::Finished)
+}
+
+/// Takes in the undos and new answers due now: the belief is resampled from the answers that
+/// then stand, and its alignment reported after each.
+fn apply_revisions(run: &mut PreferenceRun, asker: &mut Asker) {
+    let progress = run.queries() as u64;
+    for r in asker.due_revisions(progress) {
+        let preference = r.value.and_then(AnswerValue::as_preference);
+        run.revise(r.seq as usize, preference.unwrap_or(Preference::Skip));
+        asker.sink.send(revised(r, progress));
+        asker.sink.send(SessionEvent::Alignment {
+            queries: progress,
+            alignment: run.alignment(),
+            alignment_of_mean: run.alignment_of_mean(),
+        });
+    }
 }
