@@ -29,6 +29,7 @@ fn settings_override_every_sac_key() {
         ("lambda", "4"),
         ("mix", "paper"),
         ("human_critic_mask", "true"),
+        ("human_critic_anchor", "0.25"),
     ])
     .unwrap();
     assert_eq!(c.hidden, [256, 256]);
@@ -46,7 +47,8 @@ fn settings_override_every_sac_key() {
         Some(HumanCriticConfig {
             lambda: 4.0,
             mix: ActorMix::Paper,
-            mask: true
+            mask: true,
+            anchor: 0.25,
         })
     );
     let c = sac_with(&[("target_entropy", "-3"), ("target_entropy", "auto")]).unwrap();
@@ -77,6 +79,8 @@ fn settings_reject_unknown_keys_and_bad_values_clearly() {
         ("human_critic", "yes", "invalid type"),
         ("human_critic_mask", "1", "invalid type"),
         ("lambda", "-1", ">= 0"),
+        ("human_critic_anchor", "-1", ">= 0"),
+        ("human_critic_anchor", "0.5", "human_critic_mask = true"),
     ] {
         let err = sac_with(&[(k, v)]).expect_err(&format!("{k}={v} accepted"));
         assert_eq!(err.key(), Some(k), "{k}={v}: {err:?} should name its key");

@@ -47,7 +47,8 @@ fn per_task_table() {
             Some(HumanCriticConfig {
                 lambda: 9.0,
                 mix: ActorMix::Authors,
-                mask: false
+                mask: false,
+                anchor: 0.0,
             })
         );
     }

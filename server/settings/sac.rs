@@ -72,6 +72,11 @@ pub struct HumanCriticSection {
     /// Regress the human critic only on transitions that had feedback.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub human_critic_mask: Option<bool>,
+    /// With `human_critic_mask`: how hard the transitions without feedback pull the human
+    /// critic towards 0, a weight on their own mean squared error beside the answered ones' (0:
+    /// the plain mask).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub human_critic_anchor: Option<f32>,
 }
 
 /// `hidden` as a list of layer sizes, the CLI's comma-separated text, or one number.
@@ -162,6 +167,7 @@ impl HumanCriticSection {
             lambda: Some(critic.lambda),
             mix: Some(critic.mix),
             human_critic_mask: Some(critic.mask),
+            human_critic_anchor: Some(critic.anchor),
         }
     }
 
@@ -185,6 +191,21 @@ impl HumanCriticSection {
         }
         if let Some(m) = self.human_critic_mask {
             critic(sac).mask = m;
+        }
+        if let Some(a) = self.human_critic_anchor {
+            if !(a.is_finite() && a >= 0.0) {
+                return Err(SettingsError::bad(
+                    "human_critic_anchor",
+                    "must be finite and >= 0",
+                ));
+            }
+            if a > 0.0 && !critic(sac).mask {
+                return Err(SettingsError::bad(
+                    "human_critic_anchor",
+                    "anchors the masked human critic: set human_critic_mask = true too",
+                ));
+            }
+            critic(sac).anchor = a;
         }
         Ok(())
     }

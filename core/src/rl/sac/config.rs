@@ -40,6 +40,14 @@ pub struct HumanCriticConfig {
     /// `human_critic_mask` (our choice, `algorithms.md`): regress H only on rows that received feedback (H != 0).
     /// The authors train on every sampled row, the H = 0 ones included (false).
     pub mask: bool,
+    /// `human_critic_anchor` (our choice, with `mask`): how hard the rows without feedback pull
+    /// H towards 0, as a weight on their own mean squared error beside the answered rows' (0:
+    /// the plain mask). Masked, the critic at a few percent of feedback extrapolates its answers
+    /// to states nobody judged, and the actor, which weighs H nine times Q, follows it there;
+    /// anchored, H stays near 0 (and the actor follows Q) where there are no answers, while the
+    /// answers keep their own weight however much they are outnumbered.
+    #[serde(default)]
+    pub anchor: f32,
 }
 
 impl Default for HumanCriticConfig {
@@ -48,6 +56,7 @@ impl Default for HumanCriticConfig {
             lambda: 9.0,
             mix: ActorMix::Authors,
             mask: false,
+            anchor: 0.0,
         }
     }
 }

@@ -138,22 +138,26 @@ impl Sac {
     }
 
     /// Step 5 (Eq. 3): `0.5 sum_j mse(H_j(s, a), H)` on the immediate feedback, over every row
-    /// (H = 0 included, as the authors do) or, with `mask`, over the rows with H != 0 only.
-    /// `None` without a human critic, or masked with no feedback in the batch.
+    /// (H = 0 included, as the authors do) or, with `mask`, over the rows with H != 0 only, plus
+    /// `anchor` times the other rows' mean squared H (their pull towards 0).
+    /// `None` without a human critic, or masked and unanchored with no feedback in the batch.
     pub(super) fn human_critic_loss(&mut self) -> Option<f32> {
         let (hc, [h1_ws, h2_ws]) = match (&mut self.human_critic, &mut self.buffers.h_ws) {
             (Some(hc), Some(ws)) => (hc, ws),
             _ => return None,
         };
         let batch = &self.buffers.batch;
-        let mask = self.config.human_critic.as_ref().is_some_and(|c| c.mask);
-        if mask && batch.human.iter().all(|&h| h == 0.0) {
+        let config = self.config.human_critic.as_ref();
+        let mask = config
+            .is_some_and(|c| c.mask)
+            .then(|| config.map_or(0.0, |c| c.anchor));
+        if mask == Some(0.0) && batch.human.iter().all(|&h| h == 0.0) {
             return None;
         }
         let HumanCritic { h1, h2, .. } = hc;
         let loss = |h: &mut Mlp, ws: &mut MlpWorkspace| {
             fill_critic_input(ws, &batch.obs, &batch.actions);
-            regress(h, ws, &batch.human, mask.then_some(&batch.human))
+            regress(h, ws, &batch.human, mask)
         };
         let losses = side_by_side(|| loss(h1, h1_ws), || loss(h2, h2_ws));
         Some(sum_of_halves(losses))
@@ -345,17 +349,18 @@ fn sum_of_halves((first, second): (f32, f32)) -> f32 {
     sum
 }
 
-/// `mse(net(input), target)` (mean over the rows where `mask != 0`, if given), scaled by 0.5
-/// in the gradient (SB3's `0.5 * sum_j` over twins): zero the net's gradient, forward, backward.
-/// Returns the unscaled mse.
-fn regress(net: &mut Mlp, ws: &mut MlpWorkspace, target: &[f32], mask: Option<&[f32]>) -> f32 {
+/// `mse(net(input), target)` (with `masked = Some(anchor)`: over the rows where `target != 0`,
+/// plus `anchor` times the mean squared output over the others), scaled by 0.5 in the gradient
+/// (SB3's `0.5 * sum_j` over twins): zero the net's gradient, forward, backward. Returns the
+/// unscaled loss.
+fn regress(net: &mut Mlp, ws: &mut MlpWorkspace, target: &[f32], masked: Option<f32>) -> f32 {
     net.zero_grad();
     net.forward(ws);
     let (prediction, grad) = ws.output_and_grad_mut();
     let (prediction, grad) = (prediction.as_slice(), grad.as_mut_slice());
-    let loss = match mask {
+    let loss = match masked {
         None => mse_loss(prediction, target, grad),
-        Some(mask) => masked_mse_loss(prediction, target, mask, grad),
+        Some(anchor) => anchored_mse_loss(prediction, target, anchor, grad),
     };
     for g in grad.iter_mut() {
         *g *= 0.5;
@@ -364,21 +369,28 @@ fn regress(net: &mut Mlp, ws: &mut MlpWorkspace, target: &[f32], mask: Option<&[
     loss
 }
 
-/// `mse` over the rows with `mask != 0` only (the others get no gradient); the caller ensures
-/// there is at least one.
-fn masked_mse_loss(prediction: &[f32], target: &[f32], mask: &[f32], grad: &mut [f32]) -> f32 {
-    let n = mask.iter().filter(|&&m| m != 0.0).count();
-    let mut sum = 0.0f64;
-    for (((g, &p), &y), &m) in grad.iter_mut().zip(prediction).zip(target).zip(mask) {
-        if m == 0.0 {
-            *g = 0.0;
-        } else {
+/// `mse` over the answered rows (`target != 0`) plus `anchor` times the mean of `prediction^2`
+/// over the others: each group is a mean of its own, so answers keep their weight however few
+/// they are. With `anchor = 0` the unanswered rows get no gradient (the plain mask). A group
+/// with no rows adds nothing; the caller ensures the loss has at least one row.
+fn anchored_mse_loss(prediction: &[f32], target: &[f32], anchor: f32, grad: &mut [f32]) -> f32 {
+    let answered = target.iter().filter(|&&y| y != 0.0).count();
+    let silent = target.len() - answered;
+    let (mut answered_sum, mut silent_sum) = (0.0f64, 0.0f64);
+    for ((g, &p), &y) in grad.iter_mut().zip(prediction).zip(target) {
+        if y != 0.0 {
             let diff = p - y;
-            sum += f64::from(diff) * f64::from(diff);
-            *g = 2.0 * diff / n as f32;
+            answered_sum += f64::from(diff) * f64::from(diff);
+            *g = 2.0 * diff / answered as f32;
+        } else if anchor > 0.0 {
+            silent_sum += f64::from(p) * f64::from(p);
+            *g = anchor * 2.0 * p / silent as f32;
+        } else {
+            *g = 0.0;
         }
     }
-    (sum / n as f64) as f32
+    let mean = |sum: f64, n: usize| if n == 0 { 0.0 } else { sum / n as f64 };
+    (mean(answered_sum, answered) + f64::from(anchor) * mean(silent_sum, silent)) as f32
 }
 
 /// `dl_da += ` the action rows of a twin pair's input gradients through the samples each head

@@ -81,18 +81,23 @@ fn critic_loss_gradient() {
 }
 
 fn human_critic_case(mask: bool) {
+    human_critic_case_anchored(mask, 0.0);
+}
+
+fn human_critic_case_anchored(mask: bool, anchor: f32) {
     let human = HumanCriticConfig {
         mask,
+        anchor,
         ..HumanCriticConfig::default()
     };
     let mut sac = tiny(Some(human));
     let full = sac.human_critic_loss().unwrap();
     let hc = sac.human_critic.as_ref().unwrap();
     let (g1, g2) = (hc.h1.grads().to_vec(), hc.h2.grads().to_vec());
-    let name = if mask {
-        "human critic loss, masked"
-    } else {
-        "human critic loss"
+    let name = match (mask, anchor > 0.0) {
+        (true, true) => "human critic loss, masked and anchored",
+        (true, false) => "human critic loss, masked",
+        (false, _) => "human critic loss",
     };
     check(&format!("{name}, h1"), &mut sac, H1, &g1, &mut |s| {
         s.human_critic_loss().unwrap()
@@ -100,7 +105,8 @@ fn human_critic_case(mask: bool) {
     check(&format!("{name}, h2"), &mut sac, H2, &g2, &mut |s| {
         s.human_critic_loss().unwrap()
     });
-    // The masked loss ignores the rows without feedback (H = 0): moving them changes nothing.
+    // The masked loss ignores the rows without feedback (H = 0): moving them changes nothing,
+    // unless they are anchored to 0.
     let b = &mut sac.buffers.batch;
     let unlabelled: Vec<usize> = (0..b.size).filter(|&i| b.human[i] == 0.0).collect();
     assert!(!unlabelled.is_empty());
@@ -108,7 +114,48 @@ fn human_critic_case(mask: bool) {
         b.actions[2 * i] = -b.actions[2 * i];
     }
     let moved = sac.human_critic_loss().unwrap();
-    assert_eq!(mask, moved == full, "mask {mask}: {full} vs {moved}");
+    let ignored = mask && anchor == 0.0;
+    assert_eq!(
+        ignored,
+        moved == full,
+        "mask {mask}, anchor {anchor}: {full} vs {moved}"
+    );
+}
+
+#[test]
+fn anchored_human_critic_loss_gradient() {
+    human_critic_case_anchored(true, 0.3);
+}
+
+#[test]
+fn the_anchor_adds_its_share_of_the_silent_rows_mean_square() {
+    let loss = |anchor: f32| {
+        let human = HumanCriticConfig {
+            mask: true,
+            anchor,
+            ..HumanCriticConfig::default()
+        };
+        tiny(Some(human)).human_critic_loss().unwrap()
+    };
+    let (plain, half, one) = (loss(0.0), loss(0.5), loss(1.0));
+    // Linear in the anchor: the silent rows' mean square is (one - plain), half of it at 0.5.
+    assert!(one > plain, "{one} vs {plain}");
+    assert!(
+        ((half - plain) - 0.5 * (one - plain)).abs() < 1e-5,
+        "{plain} {half} {one}"
+    );
+}
+
+#[test]
+fn an_anchored_critic_still_learns_from_a_batch_without_feedback() {
+    let human = HumanCriticConfig {
+        mask: true,
+        anchor: 0.1,
+        ..HumanCriticConfig::default()
+    };
+    let mut sac = tiny(Some(human));
+    sac.buffers.batch.human.fill(0.0);
+    assert!(sac.human_critic_loss().is_some_and(|l| l > 0.0));
 }
 
 #[test]
@@ -162,6 +209,7 @@ fn actor_loss_gradient_authors_mix() {
         lambda: 9.0,
         mix: ActorMix::Authors,
         mask: false,
+        anchor: 0.0,
     };
     actor_case("actor loss, authors' mix", Some(human));
 }
@@ -172,6 +220,7 @@ fn actor_loss_gradient_paper_mix() {
         lambda: 2.0,
         mix: ActorMix::Paper,
         mask: false,
+        anchor: 0.0,
     };
     actor_case("actor loss, paper's mix", Some(human));
 }

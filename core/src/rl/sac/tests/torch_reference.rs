@@ -167,6 +167,7 @@ fn dref_with_the_authors_mix_agrees_with_pytorch() {
             lambda: 9.0,
             mix: ActorMix::Authors,
             mask: false,
+            anchor: 0.0,
         };
         let worst = check(
             Some(human),
@@ -185,6 +186,7 @@ fn dref_with_the_paper_mix_and_mask_agrees_with_pytorch() {
             lambda: 2.0,
             mix: ActorMix::Paper,
             mask: true,
+            anchor: 0.0,
         };
         let worst = check(
             Some(human),
