@@ -37,7 +37,7 @@ impl Compute {
 impl ComputeArgs {
     /// Make the choice the process default; refuses kernels this CPU cannot run.
     pub fn install(&self) -> anyhow::Result<Compute> {
-        let path = self.kernels.resolve().map_err(anyhow::Error::msg)?;
+        let path = self.kernels.resolve()?;
         kernels::set_default_path(path);
         let compute = Compute {
             path,

@@ -6,7 +6,7 @@ use std::collections::HashMap;
 
 use super::wire::{Description, SpaceMessage};
 use crate::scene_graph::SceneGraph;
-use crate::scene_graph::declared::declare;
+use crate::scene_graph::declared::{DeclaredGraphError, declare};
 use crate::sim::interned::intern;
 use crate::sim::{BoxSpace, DeclaredTask, EnvSpec};
 
@@ -57,7 +57,7 @@ pub enum DescriptionError {
     NoEpisodeSteps,
     /// The declared predicates, in the scene graph's words.
     #[error("predicates: {0}")]
-    Predicates(String),
+    Predicates(DeclaredGraphError),
     #[error("features: {0} declared, at most {MAX_FEATURES}")]
     TooManyFeatures(usize),
     #[error("features: {0} is declared twice")]

@@ -10,7 +10,9 @@ use crate::guidance::drpl::pool::Clip;
 use crate::guidance::drpl::simulated_teacher::SimulatedTeacher;
 use crate::guidance::drpl::trainer::{Preference, PreferenceQuery, PreferenceTrainer};
 use crate::guidance::drpl::trajectories::Trajectory;
-use crate::guidance::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
+use crate::guidance::evaluative_trainer::{
+    Evaluation, EvaluativeQuery, EvaluativeTrainer, RestoreError,
+};
 use crate::rl::Sac;
 use crate::scene_graph::SceneGraph;
 use crate::sim::{Env, EnvOptions, Task};
@@ -342,7 +344,7 @@ impl EvaluativeTrainer for EvaluativeAsker {
         }
     }
 
-    fn restore_state(&mut self, state: &serde_json::Value) -> Result<(), String> {
+    fn restore_state(&mut self, state: &serde_json::Value) -> Result<(), RestoreError> {
         match &mut self.judge {
             Judge::Synthetic { oracle, .. } => oracle.restore_state(state),
             Judge::Human { .. } => Ok(()),

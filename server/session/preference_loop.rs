@@ -156,7 +156,7 @@ fn kept_trajectories(
     if saved != *config {
         return Err(SessionError::EnvChanged);
     }
-    trajectory_bytes::from_bytes(trajectories).map_err(|e| bad(&e))
+    trajectory_bytes::from_bytes(trajectories).map_err(|e| bad(&e.to_string()))
 }
 
 /// The session's loop around [`PreferenceRun::step`]: pick a pair, ask, update the belief,

@@ -5,6 +5,7 @@
 use serde::de;
 
 use super::Family;
+use crate::guidance::teacher::TeacherError;
 
 /// Why settings do not read or do not apply to a run.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -58,7 +59,7 @@ pub enum SettingsError {
     /// The synthetic teacher's faults out of range, in the teacher's own words (they name the
     /// key).
     #[error("{0}")]
-    Teacher(String),
+    Teacher(TeacherError),
     /// Settings that did not serialize for merging.
     #[error("{0}")]
     Serialize(String),

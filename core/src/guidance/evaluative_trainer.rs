@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::rl::rng_state::RngStateError;
 use crate::scene_graph::AbstractState;
 
 /// A trainer's judgement of what the robot just did: H in {+1, 0, -1}, or the mean of several
@@ -57,15 +58,18 @@ impl std::hash::Hash for MeanLabel {
     }
 }
 
+/// A number that is no [`MeanLabel`] (a whole number, or outside (-1, 1)).
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[error("a mean label lies strictly between -1 and 1 and is not 0, got {0}")]
+pub struct MeanLabelError(pub f32);
+
 impl TryFrom<f32> for MeanLabel {
-    type Error = String;
-    fn try_from(h: f32) -> Result<Self, String> {
+    type Error = MeanLabelError;
+    fn try_from(h: f32) -> Result<Self, MeanLabelError> {
         if h.is_finite() && h > -1.0 && h < 1.0 && h.fract() != 0.0 {
             Ok(Self(h))
         } else {
-            Err(format!(
-                "a mean label lies strictly between -1 and 1 and is not 0, got {h}"
-            ))
+            Err(MeanLabelError(h))
         }
     }
 }
@@ -115,6 +119,17 @@ pub struct EvaluativeQuery<'a> {
     pub predicted: f32,
 }
 
+/// Why a trainer's state from a run's checkpoint does not restore.
+#[derive(Debug, thiserror::Error)]
+pub enum RestoreError {
+    /// The synthetic oracle's state is not the RNG state it writes.
+    #[error("the oracle's RNG state: {0}")]
+    OracleState(serde_json::Error),
+    /// A stored RNG state that gives no generator.
+    #[error(transparent)]
+    Rng(#[from] RngStateError),
+}
+
 /// Answers evaluative queries. `evaluate` may block (a person deciding); the training loop runs
 /// on its own thread, so blocking there stalls nothing else.
 pub trait EvaluativeTrainer {
@@ -127,7 +142,7 @@ pub trait EvaluativeTrainer {
     }
 
     /// Continue from a state that [`EvaluativeTrainer::checkpoint_state`] returned.
-    fn restore_state(&mut self, _state: &serde_json::Value) -> Result<(), String> {
+    fn restore_state(&mut self, _state: &serde_json::Value) -> Result<(), RestoreError> {
         Ok(())
     }
 }

@@ -16,7 +16,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
+use super::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer, RestoreError};
 use super::teacher::{Decision, FaultyJudge, TeacherFaults};
 use crate::rl::Sac;
 use crate::rl::rng_state::RngState;
@@ -201,17 +201,16 @@ impl EvaluativeTrainer for ExpertOracle {
         serde_json::json!({"expert": expert, "teacher": RngState::of(self.faults.rng())})
     }
 
-    fn restore_state(&mut self, state: &serde_json::Value) -> Result<(), String> {
-        let read = |v: &serde_json::Value| {
-            RngState::deserialize(v).map_err(|e| format!("the oracle's RNG state: {e}"))
-        };
+    fn restore_state(&mut self, state: &serde_json::Value) -> Result<(), RestoreError> {
+        let read =
+            |v: &serde_json::Value| RngState::deserialize(v).map_err(RestoreError::OracleState);
         match (state.get("expert"), state.get("teacher")) {
             (Some(expert), Some(teacher)) => {
                 self.expert.restore_rng(&read(expert)?)?;
                 self.faults.set_rng(read(teacher)?.restore()?);
                 Ok(())
             }
-            _ => self.expert.restore_rng(&read(state)?),
+            _ => Ok(self.expert.restore_rng(&read(state)?)?),
         }
     }
 }

@@ -48,15 +48,21 @@ impl fmt::Display for EvaluativeMethod {
     }
 }
 
+/// Why a name is no evaluative method.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum EvaluativeMethodError {
+    #[error("unknown method {0:?}: expected sac, dref, dref-authors or ef-<percent> (e.g. ef-25)")]
+    Unknown(String),
+    /// `ef-<p>` with `p` outside (0, 100].
+    #[error("EF percentage must be in (0, 100], got {0}")]
+    EfPercent(f64),
+}
+
 impl FromStr for EvaluativeMethod {
-    type Err = String;
+    type Err = EvaluativeMethodError;
 
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let bad = || {
-            format!(
-                "unknown method {s:?}: expected sac, dref, dref-authors or ef-<percent> (e.g. ef-25)"
-            )
-        };
+        let bad = || EvaluativeMethodError::Unknown(s.to_string());
         match s {
             "sac" => Ok(EvaluativeMethod::Sac),
             "dref" => Ok(EvaluativeMethod::Dref),
@@ -68,7 +74,7 @@ impl FromStr for EvaluativeMethod {
                     .parse()
                     .map_err(|_| bad())?;
                 if !(percent > 0.0 && percent <= 100.0) {
-                    return Err(format!("EF percentage must be in (0, 100], got {percent}"));
+                    return Err(EvaluativeMethodError::EfPercent(percent));
                 }
                 Ok(EvaluativeMethod::Ef { percent })
             }
@@ -77,8 +83,8 @@ impl FromStr for EvaluativeMethod {
 }
 
 impl TryFrom<String> for EvaluativeMethod {
-    type Error = String;
-    fn try_from(s: String) -> Result<Self, String> {
+    type Error = EvaluativeMethodError;
+    fn try_from(s: String) -> Result<Self, EvaluativeMethodError> {
         s.parse()
     }
 }

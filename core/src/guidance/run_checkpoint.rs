@@ -14,18 +14,47 @@ use serde::{Deserialize, Serialize};
 
 use super::{EvaluativeRun, EvaluativeRunConfig, EvaluativeTrainer};
 use crate::guidance::ask_pacing::AskPacing;
+use crate::guidance::evaluative_trainer::RestoreError;
 use crate::guidance::feedback_schedule::FeedbackSchedule;
 use crate::guidance::query_rule::QueryRule;
-use crate::rl::Sac;
 use crate::rl::kernels::{self, KernelPath};
-use crate::rl::replay::{ReplayBuffer, ReplayLayout};
-use crate::rl::rng_state::RngState;
+use crate::rl::replay::{ReplayBuffer, ReplayBytesError, ReplayLayout};
+use crate::rl::rng_state::{RngState, RngStateError};
+use crate::rl::{CheckpointError, Sac};
+use crate::sim::EnvFault;
 
 const MAGIC: &[u8] = b"dualrep-run/1\n";
 
+/// Why bytes do not resume a run; each text begins `run checkpoint: `.
 #[derive(Debug, thiserror::Error)]
-#[error("run checkpoint: {0}")]
-pub struct RunCheckpointError(String);
+pub enum RunCheckpointError {
+    #[error("run checkpoint: not a dualrep run checkpoint")]
+    NotACheckpoint,
+    /// The bytes end inside the part named (`state`, `learner`).
+    #[error("run checkpoint: truncated {0}")]
+    Truncated(&'static str),
+    /// The run's state does not read.
+    #[error("run checkpoint: state: {0}")]
+    State(serde_json::Error),
+    /// A remote env that describes itself otherwise than when the run began.
+    #[error(
+        "run checkpoint: the task or its scene graph is not the one the run was saved with (an env in another process that now declares other predicates, features or sizes?)"
+    )]
+    OtherSceneGraph,
+    #[error("run checkpoint: it belongs to a run with another configuration")]
+    OtherConfig,
+    #[error("run checkpoint: {0}")]
+    Learner(CheckpointError),
+    #[error("run checkpoint: {0}")]
+    Replay(ReplayBytesError),
+    /// The schedule's or the episode seeds' random stream.
+    #[error("run checkpoint: {0}")]
+    Rng(RngStateError),
+    #[error("run checkpoint: {0}")]
+    Trainer(RestoreError),
+    #[error("run checkpoint: resetting the environment: {0}")]
+    Reset(EnvFault),
+}
 
 /// Everything of a run at an episode's start except the learner and the replay rows.
 #[derive(Serialize, Deserialize)]
@@ -80,7 +109,7 @@ impl ScheduleState {
         }
     }
 
-    fn restore(self) -> Result<FeedbackSchedule, String> {
+    fn restore(self) -> Result<FeedbackSchedule, RngStateError> {
         Ok(match self {
             Self::Never => FeedbackSchedule::Never,
             Self::Random { probability, rng } => FeedbackSchedule::Random {
@@ -140,18 +169,16 @@ impl EvaluativeRun {
     /// The kernels a checkpoint's run computed with: to go on bit for bit, go on with kernels of
     /// the same numerics ([`KernelPath::available_equivalent`]).
     pub fn checkpoint_kernels(bytes: &[u8]) -> Result<KernelPath, RunCheckpointError> {
-        let err = |m: String| RunCheckpointError(m);
         let rest = bytes
             .strip_prefix(MAGIC)
-            .ok_or_else(|| err("not a dualrep run checkpoint".into()))?;
-        let (state, _) = split_blob(rest).ok_or_else(|| err("truncated state".into()))?;
+            .ok_or(RunCheckpointError::NotACheckpoint)?;
+        let (state, _) = split_blob(rest).ok_or(RunCheckpointError::Truncated("state"))?;
         #[derive(Deserialize)]
         struct Kernels {
             #[serde(default = "portable")]
             kernels: KernelPath,
         }
-        let state: Kernels =
-            serde_json::from_slice(state).map_err(|e| err(format!("state: {e}")))?;
+        let state: Kernels = serde_json::from_slice(state).map_err(RunCheckpointError::State)?;
         Ok(state.kernels)
     }
 
@@ -174,34 +201,26 @@ impl EvaluativeRun {
         env: Option<Box<dyn crate::sim::Env>>,
         trainer: &mut dyn EvaluativeTrainer,
     ) -> Result<(Self, serde_json::Value), RunCheckpointError> {
-        let err = |m: String| RunCheckpointError(m);
-        let rest = bytes
-            .strip_prefix(MAGIC)
-            .ok_or_else(|| err("not a dualrep run checkpoint".into()))?;
-        let (state, rest) = split_blob(rest).ok_or_else(|| err("truncated state".into()))?;
-        let (learner, rows) = split_blob(rest).ok_or_else(|| err("truncated learner".into()))?;
-        let state: RunState =
-            serde_json::from_slice(state).map_err(|e| err(format!("state: {e}")))?;
+        use RunCheckpointError as E;
+        let rest = bytes.strip_prefix(MAGIC).ok_or(E::NotACheckpoint)?;
+        let (state, rest) = split_blob(rest).ok_or(E::Truncated("state"))?;
+        let (learner, rows) = split_blob(rest).ok_or(E::Truncated("learner"))?;
+        let state: RunState = serde_json::from_slice(state).map_err(E::State)?;
         if (&state.config.task, state.config.scene_graph) != (&config.task, config.scene_graph) {
-            // A remote env that describes itself otherwise than when the run began.
-            return Err(err(
-                "the task or its scene graph is not the one the run was saved with (an env in another process that now declares other predicates, features or sizes?)".into(),
-            ));
+            return Err(E::OtherSceneGraph);
         }
         if state.config != *config {
-            return Err(err("it belongs to a run with another configuration".into()));
+            return Err(E::OtherConfig);
         }
-        let learner = Sac::from_safetensors(learner).map_err(|e| err(e.to_string()))?;
-        let replay = ReplayBuffer::from_bytes(&state.replay, rows).map_err(err)?;
-        let schedule = state.schedule.restore().map_err(err)?;
-        let episode_seeds: ChaCha8Rng = state.episode_seeds.restore().map_err(err)?;
-        trainer.restore_state(&state.trainer).map_err(err)?;
+        let learner = Sac::from_safetensors(learner).map_err(E::Learner)?;
+        let replay = ReplayBuffer::from_bytes(&state.replay, rows).map_err(E::Replay)?;
+        let schedule = state.schedule.restore().map_err(E::Rng)?;
+        let episode_seeds: ChaCha8Rng = state.episode_seeds.restore().map_err(E::Rng)?;
+        trainer.restore_state(&state.trainer).map_err(E::Trainer)?;
 
         let mut env = env.unwrap_or_else(|| state.config.make_env());
         let act_dim = env.spec().action_space.dim();
-        let obs = env
-            .try_reset(state.episode_seed)
-            .map_err(|fault| err(format!("resetting the environment: {fault}")))?;
+        let obs = env.try_reset(state.episode_seed).map_err(E::Reset)?;
         let run = Self {
             config: state.config,
             env,

@@ -64,44 +64,70 @@ impl TeacherFaults {
     }
 
     /// Ranges: beta >= 0, gamma in (0, 1], error in [0, 1), equal >= 0, every value finite.
-    pub fn validate(&self) -> Result<(), String> {
-        let finite = |key: &str, x: f64| {
-            if x.is_finite() {
+    pub fn validate(&self) -> Result<(), TeacherError> {
+        let finite = |key: &'static str, value: f64| {
+            if value.is_finite() {
                 Ok(())
             } else {
-                Err(format!("{key}: expected a finite number, got {x}"))
+                Err(TeacherError::NotFinite { key, value })
             }
         };
         if let Some(b) = self.beta {
             finite("teacher_beta", b)?;
             if b < 0.0 {
-                return Err(format!("teacher_beta: expected a number >= 0, got {b}"));
+                return Err(TeacherError::Negative {
+                    key: "teacher_beta",
+                    value: b,
+                });
             }
         }
         if let Some(g) = self.gamma
             && !(g > 0.0 && g <= 1.0)
         {
-            return Err(format!(
-                "teacher_gamma: expected a number in (0, 1], got {g}"
-            ));
+            return Err(TeacherError::Gamma(g));
         }
         if !(0.0..1.0).contains(&self.error) {
-            return Err(format!(
-                "teacher_error: expected a probability in [0, 1), got {}",
-                self.error
-            ));
+            return Err(TeacherError::ErrorRate(self.error));
         }
         if let Some(s) = self.skip {
             finite("teacher_skip", s)?;
         }
         finite("teacher_equal", self.equal)?;
         if self.equal < 0.0 {
-            return Err(format!(
-                "teacher_equal: expected a number >= 0, got {}",
-                self.equal
-            ));
+            return Err(TeacherError::Negative {
+                key: "teacher_equal",
+                value: self.equal,
+            });
         }
         Ok(())
+    }
+}
+
+/// Why a teacher's faults are out of range; the text names the setting (`teacher_beta`).
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum TeacherError {
+    /// An infinite or NaN value.
+    #[error("{key}: expected a finite number, got {value}")]
+    NotFinite { key: &'static str, value: f64 },
+    /// A negative `teacher_beta` or `teacher_equal`.
+    #[error("{key}: expected a number >= 0, got {value}")]
+    Negative { key: &'static str, value: f64 },
+    /// `teacher_gamma` outside (0, 1].
+    #[error("teacher_gamma: expected a number in (0, 1], got {0}")]
+    Gamma(f64),
+    /// `teacher_error` outside [0, 1).
+    #[error("teacher_error: expected a probability in [0, 1), got {0}")]
+    ErrorRate(f64),
+}
+
+impl TeacherError {
+    /// The setting the error names.
+    pub fn key(&self) -> &'static str {
+        match self {
+            TeacherError::NotFinite { key, .. } | TeacherError::Negative { key, .. } => key,
+            TeacherError::Gamma(_) => "teacher_gamma",
+            TeacherError::ErrorRate(_) => "teacher_error",
+        }
     }
 }
 
@@ -295,9 +321,19 @@ mod tests {
                 ..Default::default()
             },
         ];
-        for f in bad {
-            assert!(f.validate().is_err(), "{f:?}");
-        }
+        let refused: Vec<String> = bad
+            .iter()
+            .map(|f| f.validate().unwrap_err().to_string())
+            .collect();
+        assert_eq!(
+            refused,
+            [
+                "teacher_error: expected a probability in [0, 1), got 1",
+                "teacher_gamma: expected a number in (0, 1], got 0",
+                "teacher_beta: expected a number >= 0, got -1",
+                "teacher_equal: expected a finite number, got NaN",
+            ]
+        );
         assert!(TeacherFaults::default().validate().is_ok());
         assert!(TeacherFaults::default().is_perfect());
     }

@@ -48,6 +48,21 @@ impl Batch {
     }
 }
 
+/// Why bytes do not read back as a [`ReplayBuffer`] of a [`ReplayLayout`].
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ReplayBytesError {
+    /// A layout no buffer has (no capacity, more rows than room, a head out of place).
+    #[error("replay layout {0:?} is inconsistent")]
+    InconsistentLayout(ReplayLayout),
+    /// Not as many bytes as the layout's rows take.
+    #[error("replay bytes: expected {expected} for {rows} rows, found {found}")]
+    Length {
+        expected: usize,
+        rows: usize,
+        found: usize,
+    },
+}
+
 /// A buffer's shape and fill, stored beside its bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct ReplayLayout {
@@ -167,7 +182,7 @@ impl ReplayBuffer {
 
     /// The buffer [`ReplayBuffer::to_bytes`] described; an error if the bytes do not fit the
     /// layout.
-    pub fn from_bytes(layout: &ReplayLayout, bytes: &[u8]) -> Result<Self, String> {
+    pub fn from_bytes(layout: &ReplayLayout, bytes: &[u8]) -> Result<Self, ReplayBytesError> {
         let ReplayLayout {
             capacity,
             len,
@@ -176,15 +191,15 @@ impl ReplayBuffer {
             act_dim,
         } = *layout;
         if capacity == 0 || len > capacity || head >= capacity || (len < capacity && head != len) {
-            return Err(format!("replay layout {layout:?} is inconsistent"));
+            return Err(ReplayBytesError::InconsistentLayout(*layout));
         }
         let mut buffer = Self::new(capacity, obs_dim, act_dim);
         if bytes.len() != len * buffer.row_floats() * 4 {
-            return Err(format!(
-                "replay bytes: expected {} for {len} rows, found {}",
-                len * buffer.row_floats() * 4,
-                bytes.len()
-            ));
+            return Err(ReplayBytesError::Length {
+                expected: len * buffer.row_floats() * 4,
+                rows: len,
+                found: bytes.len(),
+            });
         }
         let mut floats = bytes
             .chunks_exact(4)
@@ -326,9 +341,21 @@ mod tests {
                 push_marked(&mut back, 9.0, false),
                 push_marked(&mut buf, 9.0, false)
             );
-            assert!(ReplayBuffer::from_bytes(&layout, &bytes[4..]).is_err());
+            let short = ReplayBuffer::from_bytes(&layout, &bytes[4..]).unwrap_err();
+            assert_eq!(
+                short.to_string(),
+                format!(
+                    "replay bytes: expected {} for {} rows, found {}",
+                    bytes.len(),
+                    layout.len,
+                    bytes.len() - 4
+                )
+            );
             let bad = ReplayLayout { head: 3, ..layout };
-            assert!(ReplayBuffer::from_bytes(&bad, &bytes).is_err());
+            assert_eq!(
+                ReplayBuffer::from_bytes(&bad, &bytes).unwrap_err(),
+                ReplayBytesError::InconsistentLayout(bad)
+            );
         }
     }
 }

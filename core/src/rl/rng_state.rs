@@ -5,6 +5,14 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
+/// Why a stored [`RngState`] does not give a generator back.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("word_pos {word_pos:?} is not a number")]
+pub struct RngStateError {
+    /// The stored position, as it reads.
+    pub word_pos: String,
+}
+
 /// Key, stream and position in the stream. The position is a u128, which JSON numbers cannot
 /// carry exactly, so it travels as a decimal string.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -24,11 +32,10 @@ impl RngState {
     }
 
     /// The generator, positioned where [`RngState::of`] found it.
-    pub fn restore(&self) -> Result<ChaCha8Rng, String> {
-        let word_pos: u128 = self
-            .word_pos
-            .parse()
-            .map_err(|_| format!("word_pos {:?} is not a number", self.word_pos))?;
+    pub fn restore(&self) -> Result<ChaCha8Rng, RngStateError> {
+        let word_pos: u128 = self.word_pos.parse().map_err(|_| RngStateError {
+            word_pos: self.word_pos.clone(),
+        })?;
         let mut rng = ChaCha8Rng::from_seed(self.seed);
         rng.set_stream(self.stream);
         rng.set_word_pos(word_pos);
@@ -57,6 +64,9 @@ mod tests {
             word_pos: "x".into(),
             ..RngState::of(&rng)
         };
-        assert!(bad.restore().unwrap_err().contains("word_pos"));
+        assert_eq!(
+            bad.restore().unwrap_err().to_string(),
+            r#"word_pos "x" is not a number"#
+        );
     }
 }

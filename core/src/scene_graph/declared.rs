@@ -27,14 +27,32 @@ pub struct DeclaredPredicate {
     pub label: String,
 }
 
+/// Why an env's declared predicates do not make a scene graph.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum DeclaredGraphError {
+    /// More predicates than an abstract state holds.
+    #[error("{0} predicates declared: at most {MAX_PREDICATES}")]
+    TooMany(usize),
+    /// A name that is not a stable identifier.
+    #[error(
+        "predicate name {0:?}: expected lowercase letters, digits and _ (starting with a letter, at most {MAX_NAME})"
+    )]
+    BadName(String),
+    /// An empty or overlong label (the predicate's name).
+    #[error("predicate {0}: its label must be 1 to {MAX_LABEL} characters")]
+    BadLabel(String),
+    /// A name declared twice.
+    #[error("predicate {0} is declared twice")]
+    Twice(String),
+}
+
 /// Check `predicates` and give them as a graph's predicate list (the same list, declared again,
 /// is the same slice).
-pub fn declare(predicates: &[DeclaredPredicate]) -> Result<&'static [Predicate], String> {
+pub fn declare(
+    predicates: &[DeclaredPredicate],
+) -> Result<&'static [Predicate], DeclaredGraphError> {
     if predicates.len() > MAX_PREDICATES {
-        return Err(format!(
-            "{} predicates declared: at most {MAX_PREDICATES}",
-            predicates.len()
-        ));
+        return Err(DeclaredGraphError::TooMany(predicates.len()));
     }
     let mut seen = std::collections::HashSet::new();
     for p in predicates {
@@ -44,19 +62,13 @@ pub fn declare(predicates: &[DeclaredPredicate]) -> Result<&'static [Predicate],
                 .chars()
                 .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_');
         if !valid {
-            return Err(format!(
-                "predicate name {:?}: expected lowercase letters, digits and _ (starting with a letter, at most {MAX_NAME})",
-                p.name
-            ));
+            return Err(DeclaredGraphError::BadName(p.name.clone()));
         }
         if p.label.trim().is_empty() || p.label.chars().count() > MAX_LABEL {
-            return Err(format!(
-                "predicate {}: its label must be 1 to {MAX_LABEL} characters",
-                p.name
-            ));
+            return Err(DeclaredGraphError::BadLabel(p.name.clone()));
         }
         if !seen.insert(p.name.as_str()) {
-            return Err(format!("predicate {} is declared twice", p.name));
+            return Err(DeclaredGraphError::Twice(p.name.clone()));
         }
     }
     static LISTS: OnceLock<Mutex<HashMap<Vec<DeclaredPredicate>, &'static [Predicate]>>> =
@@ -120,9 +132,9 @@ impl From<SceneGraph> for GraphRepr {
 }
 
 impl TryFrom<GraphRepr> for SceneGraph {
-    type Error = String;
+    type Error = DeclaredGraphError;
 
-    fn try_from(repr: GraphRepr) -> Result<Self, String> {
+    fn try_from(repr: GraphRepr) -> Result<Self, DeclaredGraphError> {
         Ok(match repr {
             GraphRepr::Reaching => SceneGraph::Reaching,
             GraphRepr::Placing => SceneGraph::Placing,
@@ -177,15 +189,18 @@ mod tests {
     #[test]
     fn bad_declarations_are_refused_with_the_reason() {
         let twice = [p("a", "A"), p("a", "B")];
-        assert!(declare(&twice).unwrap_err().contains("twice"));
-        assert!(
-            declare(&[p("Upright", "x")])
-                .unwrap_err()
-                .contains("lowercase")
+        let refused = |list: &[DeclaredPredicate]| declare(list).unwrap_err().to_string();
+        assert_eq!(refused(&twice), "predicate a is declared twice");
+        assert_eq!(
+            refused(&[p("Upright", "x")]),
+            r#"predicate name "Upright": expected lowercase letters, digits and _ (starting with a letter, at most 64)"#
         );
-        assert!(declare(&[p("ok", " ")]).unwrap_err().contains("label"));
+        assert_eq!(
+            refused(&[p("ok", " ")]),
+            "predicate ok: its label must be 1 to 200 characters"
+        );
         let many: Vec<_> = (0..33).map(|i| p(&format!("p{i}"), "x")).collect();
-        assert!(declare(&many).unwrap_err().contains("at most 32"));
+        assert_eq!(refused(&many), "33 predicates declared: at most 32");
         assert!(declare(&[]).unwrap().is_empty());
     }
 }

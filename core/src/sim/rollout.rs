@@ -36,16 +36,19 @@ impl fmt::Display for SimplePolicy {
     }
 }
 
+/// A name that is no [`SimplePolicy`].
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown policy {0:?}: expected random or heuristic")]
+pub struct UnknownPolicy(pub String);
+
 impl FromStr for SimplePolicy {
-    type Err = String;
+    type Err = UnknownPolicy;
 
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s {
             "random" => Ok(SimplePolicy::Random),
             "heuristic" => Ok(SimplePolicy::Heuristic),
-            other => Err(format!(
-                "unknown policy {other:?}: expected random or heuristic"
-            )),
+            other => Err(UnknownPolicy(other.to_string())),
         }
     }
 }

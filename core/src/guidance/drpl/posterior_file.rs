@@ -6,7 +6,7 @@
 use std::collections::HashMap;
 
 use safetensors::tensor::TensorView;
-use safetensors::{Dtype, SafeTensors};
+use safetensors::{Dtype, SafeTensorError, SafeTensors};
 
 use super::belief::Belief;
 
@@ -44,13 +44,38 @@ pub fn posterior_safetensors(belief: &Belief, names: &[&str], queries: usize) ->
     safetensors::serialize(tensors, Some(metadata)).expect("a posterior serialises")
 }
 
+/// Why bytes are not a posterior file.
+#[derive(Debug, thiserror::Error)]
+pub enum PosteriorFileError {
+    /// Not safetensors (safetensors' words).
+    #[error("{0}")]
+    Format(SafeTensorError),
+    /// The tensor `name` is not there.
+    #[error("{name}: {error}")]
+    Tensor {
+        name: String,
+        error: SafeTensorError,
+    },
+    /// The tensor `name` is not f64.
+    #[error("{name} is {dtype:?}, not F64")]
+    Dtype { name: String, dtype: Dtype },
+}
+
 /// The `(samples, mean_theta)` of a posterior file, rows of `samples` first (tests, tools).
-pub fn read_posterior(bytes: &[u8]) -> Result<(Vec<Vec<f64>>, Vec<f64>), String> {
-    let st = SafeTensors::deserialize(bytes).map_err(|e| e.to_string())?;
-    let floats = |name: &str| -> Result<(Vec<usize>, Vec<f64>), String> {
-        let t = st.tensor(name).map_err(|e| format!("{name}: {e}"))?;
+pub fn read_posterior(bytes: &[u8]) -> Result<(Vec<Vec<f64>>, Vec<f64>), PosteriorFileError> {
+    let st = SafeTensors::deserialize(bytes).map_err(PosteriorFileError::Format)?;
+    let floats = |name: &str| -> Result<(Vec<usize>, Vec<f64>), PosteriorFileError> {
+        let t = st
+            .tensor(name)
+            .map_err(|error| PosteriorFileError::Tensor {
+                name: name.to_string(),
+                error,
+            })?;
         if t.dtype() != Dtype::F64 {
-            return Err(format!("{name} is {:?}, not F64", t.dtype()));
+            return Err(PosteriorFileError::Dtype {
+                name: name.to_string(),
+                dtype: t.dtype(),
+            });
         }
         let v = t
             .data()

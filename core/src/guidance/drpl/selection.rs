@@ -62,16 +62,19 @@ impl fmt::Display for QueryMethod {
     }
 }
 
+/// A name that is no [`QueryMethod`].
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown preference method {0:?}: expected drpl, drpl-ss, fragment or full")]
+pub struct UnknownQueryMethod(pub String);
+
 impl FromStr for QueryMethod {
-    type Err = String;
+    type Err = UnknownQueryMethod;
 
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         QueryMethod::ALL
             .into_iter()
             .find(|m| m.id() == s)
-            .ok_or_else(|| {
-                format!("unknown preference method {s:?}: expected drpl, drpl-ss, fragment or full")
-            })
+            .ok_or_else(|| UnknownQueryMethod(s.to_string()))
     }
 }
 

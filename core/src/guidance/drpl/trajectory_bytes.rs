@@ -11,6 +11,17 @@ use crate::scene_graph::AbstractState;
 
 const MAGIC: &[u8] = b"dualrep-trajectories/1\n";
 
+/// Why bytes are not recorded trajectories.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum TrajectoryBytesError {
+    #[error("not dualrep's recorded trajectories")]
+    NotTrajectories,
+    #[error("the trajectories are cut short")]
+    CutShort,
+    #[error("the trajectories have trailing bytes")]
+    TrailingBytes,
+}
+
 /// The trajectories as bytes.
 pub fn to_bytes(trajectories: &[Trajectory]) -> Vec<u8> {
     let mut out = Vec::from(MAGIC);
@@ -38,20 +49,20 @@ pub fn to_bytes(trajectories: &[Trajectory]) -> Vec<u8> {
 struct Reader<'a>(&'a [u8]);
 
 impl Reader<'_> {
-    fn take<const N: usize>(&mut self) -> Result<[u8; N], String> {
+    fn take<const N: usize>(&mut self) -> Result<[u8; N], TrajectoryBytesError> {
         let (head, rest) = self
             .0
             .split_first_chunk::<N>()
-            .ok_or("the trajectories are cut short")?;
+            .ok_or(TrajectoryBytesError::CutShort)?;
         self.0 = rest;
         Ok(*head)
     }
 
-    fn u32(&mut self) -> Result<u32, String> {
+    fn u32(&mut self) -> Result<u32, TrajectoryBytesError> {
         self.take().map(u32::from_le_bytes)
     }
 
-    fn f32s(&mut self, n: usize) -> Result<Vec<f32>, String> {
+    fn f32s(&mut self, n: usize) -> Result<Vec<f32>, TrajectoryBytesError> {
         (0..n)
             .map(|_| self.take().map(f32::from_le_bytes))
             .collect()
@@ -59,11 +70,11 @@ impl Reader<'_> {
 }
 
 /// The trajectories [`to_bytes`] wrote.
-pub fn from_bytes(bytes: &[u8]) -> Result<Vec<Trajectory>, String> {
+pub fn from_bytes(bytes: &[u8]) -> Result<Vec<Trajectory>, TrajectoryBytesError> {
     let mut r = Reader(
         bytes
             .strip_prefix(MAGIC)
-            .ok_or("not dualrep's recorded trajectories")?,
+            .ok_or(TrajectoryBytesError::NotTrajectories)?,
     );
     let count = r.u32()? as usize;
     let mut out = Vec::with_capacity(count.min(1 << 16));
@@ -90,7 +101,7 @@ pub fn from_bytes(bytes: &[u8]) -> Result<Vec<Trajectory>, String> {
         out.push(t);
     }
     if !r.0.is_empty() {
-        return Err("the trajectories have trailing bytes".into());
+        return Err(TrajectoryBytesError::TrailingBytes);
     }
     Ok(out)
 }
@@ -116,10 +127,21 @@ mod tests {
         trajs[1].steps[0].env_features = vec![0.25, -1.5];
         let bytes = to_bytes(&trajs);
         assert_eq!(from_bytes(&bytes).unwrap(), trajs);
-        assert!(from_bytes(&bytes[..bytes.len() - 1]).is_err());
-        assert!(from_bytes(b"nope").unwrap_err().contains("not dualrep"));
+        assert_eq!(
+            from_bytes(&bytes[..bytes.len() - 1])
+                .unwrap_err()
+                .to_string(),
+            "the trajectories are cut short"
+        );
+        assert_eq!(
+            from_bytes(b"nope").unwrap_err().to_string(),
+            "not dualrep's recorded trajectories"
+        );
         let mut longer = bytes.clone();
         longer.push(0);
-        assert!(from_bytes(&longer).unwrap_err().contains("trailing"));
+        assert_eq!(
+            from_bytes(&longer).unwrap_err().to_string(),
+            "the trajectories have trailing bytes"
+        );
     }
 }

@@ -135,14 +135,31 @@ impl fmt::Display for KernelPath {
 }
 
 impl FromStr for KernelPath {
-    type Err = String;
+    type Err = KernelChoiceError;
 
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> Result<Self, KernelChoiceError> {
         KernelPath::ALL
             .into_iter()
             .find(|p| p.name() == s.trim())
-            .ok_or_else(|| format!("unknown kernels {s:?}: expected avx512, avx2 or portable"))
+            .ok_or_else(|| KernelChoiceError::Unknown {
+                name: s.to_string(),
+                or_auto: false,
+            })
     }
+}
+
+/// Why kernels asked for by name are not the ones to run.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum KernelChoiceError {
+    /// No kernels of that name (`or_auto`: where `auto` may be asked for too).
+    #[error(
+        "unknown kernels {name:?}: expected avx512, avx2 or portable{}",
+        if *.or_auto { " or auto" } else { "" }
+    )]
+    Unknown { name: String, or_auto: bool },
+    /// Kernels this CPU cannot run.
+    #[error("this CPU cannot run the {0} kernels (it runs {runs})", runs = available_names())]
+    Unavailable(KernelPath),
 }
 
 /// What a user asks for: the best this CPU has, or one path.
@@ -154,28 +171,30 @@ pub enum KernelChoice {
 
 impl KernelChoice {
     /// The path to run, or why this CPU cannot run the one asked for.
-    pub fn resolve(self) -> Result<KernelPath, String> {
+    pub fn resolve(self) -> Result<KernelPath, KernelChoiceError> {
         match self {
             KernelChoice::Auto => Ok(KernelPath::best_available()),
             KernelChoice::Exactly(p) if p.is_available() => Ok(p),
-            KernelChoice::Exactly(p) => Err(format!(
-                "this CPU cannot run the {p} kernels (it runs {})",
-                available_names()
-            )),
+            KernelChoice::Exactly(p) => Err(KernelChoiceError::Unavailable(p)),
         }
     }
 }
 
 impl FromStr for KernelChoice {
-    type Err = String;
+    type Err = KernelChoiceError;
 
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> Result<Self, KernelChoiceError> {
         match s.trim() {
             "auto" => Ok(KernelChoice::Auto),
-            other => other
-                .parse()
-                .map(KernelChoice::Exactly)
-                .map_err(|e: String| format!("{e} or auto")),
+            other => {
+                other
+                    .parse()
+                    .map(KernelChoice::Exactly)
+                    .map_err(|_| KernelChoiceError::Unknown {
+                        name: other.to_string(),
+                        or_auto: true,
+                    })
+            }
         }
     }
 }
@@ -329,11 +348,13 @@ mod tests {
             );
         }
         assert_eq!("auto".parse::<KernelChoice>().unwrap(), KernelChoice::Auto);
-        assert!(
-            "sse"
-                .parse::<KernelChoice>()
-                .unwrap_err()
-                .contains("avx512")
+        assert_eq!(
+            " sse".parse::<KernelPath>().unwrap_err().to_string(),
+            r#"unknown kernels " sse": expected avx512, avx2 or portable"#
+        );
+        assert_eq!(
+            " sse".parse::<KernelChoice>().unwrap_err().to_string(),
+            r#"unknown kernels "sse": expected avx512, avx2 or portable or auto"#
         );
         assert!(KernelPath::Portable.is_available());
         assert!(KernelChoice::Auto.resolve().unwrap().is_available());

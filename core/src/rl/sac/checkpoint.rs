@@ -166,12 +166,10 @@ impl Sac {
         let critic = || Mlp::zeros(obs_dim + act_dim, &hidden, 1);
         let actor = Mlp::zeros(obs_dim, &hidden, 2 * act_dim);
         let human = config.human_critic.is_some().then(|| (critic(), critic()));
-        let rng = rng
-            .restore()
-            .map_err(|message| CheckpointError::BadMetadata {
-                key: "rng",
-                message,
-            })?;
+        let rng = rng.restore().map_err(|e| CheckpointError::BadMetadata {
+            key: "rng",
+            message: e.to_string(),
+        })?;
         let mut sac = Sac::from_parts(
             obs_dim,
             act_dim,

@@ -182,7 +182,10 @@ impl Sac {
         crate::rl::rng_state::RngState::of(&self.rng)
     }
 
-    pub fn restore_rng(&mut self, state: &crate::rl::rng_state::RngState) -> Result<(), String> {
+    pub fn restore_rng(
+        &mut self,
+        state: &crate::rl::rng_state::RngState,
+    ) -> Result<(), crate::rl::rng_state::RngStateError> {
         self.rng = state.restore()?;
         Ok(())
     }
