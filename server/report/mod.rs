@@ -18,6 +18,7 @@
 //! [`write_report`] ties the last four together for a grid directory.
 
 pub mod aggregate;
+pub mod distributions;
 pub mod font;
 pub mod grid;
 pub mod local;
