@@ -30,6 +30,9 @@
 //!   resume (on a remote env, which cannot replay, its latest whole-run checkpoint instead, then
 //!   the stored answers to the moments it meets again), checkpoints. No async runtime, no
 //!   database.
+//! - [`study`]: human-subject studies (the paper's Figures 4 and 6): which conditions a
+//!   within-subject study compares and the counterbalanced order (Williams, random, fixed) in
+//!   which each participant meets them; their analysis is [`report::within_subject`].
 //!
 //! The edge (files, processes, network, database):
 //!
@@ -75,4 +78,5 @@ pub mod session;
 pub mod settings;
 pub mod shipped;
 pub mod store;
+pub mod study;
 pub mod ws;

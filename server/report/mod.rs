@@ -10,6 +10,9 @@
 //! - [`stats`], [`aggregate`] (pure): mean and standard error over seeds, on a common step grid
 //!   for Figure 3 and per query for Figure 5.
 //! - [`rank_test`] (pure): the one-sided exact Mann-Whitney U test over seeds.
+//! - [`within_subject`] (pure): a human-subject study's participants x conditions scores:
+//!   Friedman and Kendall's W, pairwise Wilcoxon signed-rank tests with Holm's correction, the
+//!   one-sided paired test over seeds; tails from [`distributions`].
 //! - [`table`] (pure): `table.md`, with the paper's published values beside ours.
 //! - [`robustness`] (pure): the grid, numbers and table of `reproduce robustness` (simulated
 //!   teachers that make mistakes).
@@ -18,6 +21,7 @@
 //! [`write_report`] ties the last four together for a grid directory.
 
 pub mod aggregate;
+pub mod distributions;
 pub mod font;
 pub mod grid;
 pub mod local;
@@ -31,6 +35,7 @@ pub mod runner;
 pub mod slurm;
 pub mod stats;
 pub mod table;
+pub mod within_subject;
 
 use std::fs;
 use std::path::{Path, PathBuf};
