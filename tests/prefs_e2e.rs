@@ -53,6 +53,7 @@ fn every_method_writes_what_the_report_reads() {
         ("placing", "drpl-ss"),
         ("lunar-lander", "fragment"),
         ("reaching", "full"),
+        ("placing", "drpl-mi"),
     ] {
         let out = dir.path().join(format!("{task}-{method}"));
         let summary = prefs(task, method, 4, 3, &out);
@@ -65,6 +66,13 @@ fn every_method_writes_what_the_report_reads() {
             (Some(3), Some(4))
         );
         assert_eq!(summary["trajectories"], 8);
+        // DRPL-MI is DRPL with the mutual-information pick; the others pick uniformly.
+        let acquisition = if method == "drpl-mi" {
+            "mutual_information"
+        } else {
+            "uniform"
+        };
+        assert_eq!(summary["config"]["acquisition"], acquisition, "{method}");
         assert_eq!(summary["theta_true"].as_array().unwrap().len(), dim);
         assert_eq!(summary["feature_names"].as_array().unwrap().len(), dim);
         for field in [
@@ -107,7 +115,7 @@ fn every_method_writes_what_the_report_reads() {
                 assert_eq!(line[side]["raw_features"].as_array().unwrap().len(), dim);
                 let g = &line[side]["abstract_state"];
                 match method {
-                    "drpl" | "drpl-ss" => {
+                    "drpl" | "drpl-mi" | "drpl-ss" => {
                         let bits = g.as_str().unwrap();
                         assert_eq!(bits.len(), SceneGraph::for_task(t).dim());
                         assert!(bits.chars().all(|c| c == '0' || c == '1'));
@@ -121,7 +129,7 @@ fn every_method_writes_what_the_report_reads() {
                     line["right"]["abstract_state"]
                 );
             }
-            if method == "drpl" {
+            if method == "drpl" || method == "drpl-mi" {
                 // The two states differ in the predicate the line names.
                 let names: Vec<_> = SceneGraph::for_task(t)
                     .predicates()

@@ -32,7 +32,8 @@ pub struct PrefsArgs {
     /// reaching, placing or lunar-lander (with `--env-url`: the task the remote env copies).
     #[arg(long)]
     pub task: Option<Task>,
-    /// drpl, drpl-ss, fragment or full.
+    /// drpl, drpl-ss, fragment or full (the paper's), or drpl-mi: DRPL with the
+    /// mutual-information pick among its candidate pairs (ours).
     #[arg(long)]
     pub method: QueryMethod,
     /// Queries to ask (each answered by the synthetic oracle).
@@ -48,7 +49,7 @@ pub struct PrefsArgs {
     #[arg(long, value_parser = clap::value_parser!(u64).range(2..))]
     pub trajectories: Option<u64>,
     /// The pick among candidates: uniform (the paper's) or mutual-information [default:
-    /// uniform]; wins over `--set acquisition=`.
+    /// uniform; drpl-mi: mutual-information]; wins over `--set acquisition=`.
     #[arg(long, value_parser = parse_acquisition)]
     pub acquisition: Option<Acquisition>,
     #[command(flatten)]

@@ -43,8 +43,11 @@ pub struct ReproduceArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub queries: Option<u32>,
     /// Comma-separated methods [default: fig3 dref,ef-100,ef-50,ef-25,sac,ef-dref; fig5
-    /// drpl,drpl-ss,fragment,full; robustness dref,ef-100,drpl]. `ef-dref` is EF at DREF's
-    /// measured feedback rate, run once DREF's runs on that task have finished.
+    /// drpl,drpl-ss,fragment,full,drpl-mi; robustness dref,ef-100,drpl]. `ef-dref` is EF at
+    /// DREF's measured feedback rate, run once DREF's runs on that task have finished.
+    /// `drpl-mi` (ours, not the paper's) is DRPL with the mutual-information pick among its
+    /// candidate pairs (`acquisition = mutual_information`, which `--set acquisition=` can
+    /// override).
     #[arg(long, value_delimiter = ',')]
     pub methods: Vec<String>,
     /// robustness: the teacher's error rates in percent, for the evaluative methods [default:

@@ -31,7 +31,7 @@ pub struct LaunchRequest {
     /// `docs/env-protocol.md`) instead of our simulator.
     #[serde(default)]
     pub env: Option<RemoteTarget>,
-    /// dref, ef-<percent> (ef-100, ef-50, ef-6.2, ...), sac, drpl, drpl-ss, fragment or full.
+    /// dref, ef-<percent> (ef-100, ef-50, ef-6.2, ...), sac, drpl, drpl-mi, drpl-ss, fragment or full.
     #[schema(value_type = String, example = "dref")]
     pub method: SessionMethod,
     pub trainer: TrainerKind,

@@ -152,6 +152,10 @@ pub struct Fig5Method {
     /// x is the query index.
     pub curve: Curve,
     pub final_alignment: MeanSe,
+    /// The same per run, as (seed, final alignment): what the paired tests between methods
+    /// pair by seed (each seed has its own true reward and trajectories, the same for every
+    /// method).
+    pub finals_by_seed: Vec<(u64, f64)>,
     /// cos(posterior mean, theta_true) after the last query: APReL's `cosine_similarity`.
     pub final_alignment_of_mean: MeanSe,
     pub segment_length: MeanSe,
@@ -293,8 +297,11 @@ pub fn aggregate_fig5(runs: &[PrefsRun]) -> Vec<Fig5Task> {
                         curve.se.push(m.se);
                         curve.n.push(m.n);
                     }
-                    let finals: Vec<f64> =
-                        seeds.iter().map(|r| r.summary.final_alignment).collect();
+                    let finals_by_seed: Vec<(u64, f64)> = seeds
+                        .iter()
+                        .map(|r| (r.key.seed, r.summary.final_alignment))
+                        .collect();
+                    let finals: Vec<f64> = finals_by_seed.iter().map(|&(_, a)| a).collect();
                     let finals_of_mean: Vec<f64> = seeds
                         .iter()
                         .filter_map(|r| r.alignment.last().map(|row| row.alignment_of_mean))
@@ -307,6 +314,7 @@ pub fn aggregate_fig5(runs: &[PrefsRun]) -> Vec<Fig5Task> {
                         method,
                         curve,
                         final_alignment: mean_se(&finals),
+                        finals_by_seed,
                         final_alignment_of_mean: mean_se(&finals_of_mean),
                         segment_length: mean_se(&lengths),
                     }

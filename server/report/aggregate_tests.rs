@@ -166,7 +166,9 @@ fn report_fig5_averages_per_query_over_the_seeds_that_reached_it() {
     // Final alignments 0.8 and 0.8; segment lengths 10 and 11.
     assert!(close(drpl.final_alignment.mean, 0.8) && close(drpl.final_alignment.se, 0.0));
     assert!(close(drpl.segment_length.mean, 10.5));
+    assert_eq!(drpl.finals_by_seed, vec![(0, 0.8), (1, 0.8)]);
     assert_eq!(tasks[0].methods[1].method, "full");
+    assert_eq!(tasks[0].methods[1].finals_by_seed, vec![(0, 0.1)]);
 }
 
 #[test]

@@ -46,7 +46,6 @@ pub enum Figure {
 }
 
 impl Figure {
-    /// The file stem of the figure ("fig3").
     /// The methods a grid of this figure runs, as a refusal lists them.
     fn known_methods(self) -> &'static str {
         match self {
@@ -54,10 +53,11 @@ impl Figure {
                 "dref, dref-authors, sac, sac-r100, dref-masked, ef-<p> (0 <= p <= 100), \
                  ef-dref, ef-dref-authors"
             }
-            Figure::Fig5 | Figure::Robustness => "drpl, drpl-ss, fragment, full",
+            Figure::Fig5 | Figure::Robustness => "drpl, drpl-ss, fragment, full, drpl-mi",
         }
     }
 
+    /// The file stem of the figure ("fig3").
     pub fn stem(self) -> &'static str {
         match self {
             Figure::Fig3 => "fig3",
@@ -66,11 +66,12 @@ impl Figure {
         }
     }
 
-    /// The methods run when `--methods` is not given, in the paper's legend order.
+    /// The methods run when `--methods` is not given, in the paper's legend order (Figure 5:
+    /// the paper's four, then DRPL-MI, ours).
     pub fn default_methods(self) -> &'static [&'static str] {
         match self {
             Figure::Fig3 => &["dref", "ef-100", "ef-50", "ef-25", "sac", MATCHED_EF],
-            Figure::Fig5 => &["drpl", "drpl-ss", "fragment", "full"],
+            Figure::Fig5 => &["drpl", "drpl-ss", "fragment", "full", "drpl-mi"],
             Figure::Robustness => &["dref", "ef-100", "drpl"],
         }
     }

@@ -86,6 +86,7 @@ impl Fig3Method {
 pub fn display_name(method: &str) -> String {
     match method {
         "drpl" => return "DRPL".into(),
+        "drpl-mi" => return "DRPL-MI (ours: mutual-information pick)".into(),
         "drpl-ss" => return "DRPL-SS".into(),
         "fragment" => return "Random fragment".into(),
         "full" => return "Full trajectory".into(),
@@ -109,6 +110,8 @@ pub fn order_key(method: &str) -> (usize, String) {
         "drpl-ss" => 1,
         "fragment" => 2,
         "full" => 3,
+        // Ours, not the paper's: after the paper's four rows.
+        "drpl-mi" => 4,
         _ => Fig3Method::parse(method).map_or(100, Fig3Method::rank),
     };
     (rank, method.to_string())
@@ -270,6 +273,10 @@ mod tests {
         assert_eq!(display_name("ef-100"), "EF-100%");
         assert_eq!(display_name("ef-6.2"), "EF-6.2%");
         assert_eq!(display_name("drpl-ss"), "DRPL-SS");
+        assert_eq!(
+            display_name("drpl-mi"),
+            "DRPL-MI (ours: mutual-information pick)"
+        );
         assert_eq!(display_name("mystery"), "mystery");
     }
 

@@ -1,15 +1,17 @@
 //! `table.md`: per task a Markdown table of mean ± standard error over seeds, with the paper's
 //! published values beside ours for Figure 3. Pure: returns the text, the caller writes it.
 
+use std::collections::BTreeMap;
 use std::fmt::Write;
 
-use super::aggregate::{Fig3Task, Fig5Task};
+use super::aggregate::{Fig3Task, Fig5Method, Fig5Task};
 use super::methods::{
     AuthorsRatio, Fig3Method, Published, authors_ratios, display_name, matched_ef_method,
     paper_steps, published_fig3, published_ratio, task_title,
 };
 use super::rank_test::mann_whitney_greater;
-use super::stats::MeanSe;
+use super::stats::{MeanSe, mean_se};
+use super::within_subject::{WilcoxonMethod, wilcoxon_greater};
 
 /// A cumulative reward as the paper prints it: in thousands with one decimal ("34.1k") when
 /// `thousands`, else whole numbers; the error in the same unit. One table section uses one unit
@@ -308,8 +310,104 @@ weights: *alignment* is the mean over posterior samples of the cosine between sa
 weights (what the figure plots); *alignment of mean* is the cosine between the posterior mean \
 and the true weights, which is what APReL's `cosine_similarity` (the paper's alignment score) \
 computes. The paper publishes no table; its text reports DRPL converging to about 0.8 or more \
-on every task and beating all baselines, with DRPL-SS second.
+on every task and beating all baselines, with DRPL-SS second. DRPL-MI is ours, not the paper's: \
+DRPL with a mutual-information pick among its candidate pairs instead of the uniform one \
+(`acquisition = mutual_information`), the paper's DRPL left as it is.
+
+Below each table, DRPL and DRPL-MI against each baseline (and DRPL-MI against DRPL): the final \
+alignments paired by seed (a seed's runs share their trajectories and true reward), over the \
+seeds both rows have; the mean of the differences ± its standard error; the seeds on which the \
+first row is higher; and the one-sided Wilcoxon signed-rank p that the first lies above the \
+second (exact without ties, zero differences dropped).
 ";
+
+/// The rows the paired tests put first, each with the rows it is tested against.
+const FIG5_PAIRED: [(&str, &[&str]); 2] = [
+    ("drpl", &["drpl-ss", "fragment", "full"]),
+    ("drpl-mi", &["drpl-ss", "fragment", "full", "drpl"]),
+];
+
+/// A method's name without its parenthesised note ("DRPL-MI", not "DRPL-MI (ours: ...)").
+fn short_name(method: &str) -> String {
+    let name = display_name(method);
+    match name.split_once(" (") {
+        Some((short, _)) => short.to_string(),
+        None => name,
+    }
+}
+
+/// A p-value to two significant digits: "0.012", "4.8e-6".
+fn fmt_p(p: f64) -> String {
+    if p < 0.001 {
+        format!("{p:.1e}")
+    } else {
+        format!("{p:.3}")
+    }
+}
+
+/// One paired line: whether `x`'s final alignments lie above `y`'s, seed by seed, by the
+/// one-sided Wilcoxon signed-rank test over the seeds both have; `None` without such seeds.
+pub fn fig5_paired_line(x: &Fig5Method, y: &Fig5Method) -> Option<String> {
+    let of_y: BTreeMap<u64, f64> = y.finals_by_seed.iter().copied().collect();
+    let mut pairs: Vec<(u64, f64, f64)> = x
+        .finals_by_seed
+        .iter()
+        .filter_map(|&(seed, a)| of_y.get(&seed).map(|&b| (seed, a, b)))
+        .collect();
+    if pairs.is_empty() {
+        return None;
+    }
+    pairs.sort_by_key(|&(seed, _, _)| seed);
+    let (xs, ys): (Vec<f64>, Vec<f64>) = pairs.iter().map(|&(_, a, b)| (a, b)).unzip();
+    let differences: Vec<f64> = pairs.iter().map(|&(_, a, b)| a - b).collect();
+    let d = mean_se(&differences);
+    let wins = differences.iter().filter(|&&d| d > 0.0).count();
+    let t = wilcoxon_greater(&xs, &ys);
+    let mut notes = Vec::new();
+    if t.zeros > 0 {
+        notes.push(format!("{} tied seeds dropped", t.zeros));
+    }
+    if t.method == WilcoxonMethod::Normal {
+        notes.push("normal approximation".to_string());
+    }
+    let notes = if notes.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", notes.join(", "))
+    };
+    Some(format!(
+        "{} above {}: one-sided paired Wilcoxon signed-rank over {} seeds (paired by seed), \
+         mean difference {:+.3} ± {:.3}, wins {wins} of {}, p = {}{notes}.",
+        short_name(&x.method),
+        short_name(&y.method),
+        pairs.len(),
+        d.mean,
+        d.se,
+        pairs.len(),
+        fmt_p(t.p),
+    ))
+}
+
+/// Every paired line of one task ([`FIG5_PAIRED`]), for the rows it has.
+fn fig5_paired(task: &Fig5Task) -> String {
+    let row = |name: &str| task.methods.iter().find(|m| m.method == name);
+    let mut out = String::new();
+    for (first, others) in FIG5_PAIRED {
+        let Some(x) = row(first) else { continue };
+        for line in others
+            .iter()
+            .filter_map(|other| row(other))
+            .filter_map(|y| fig5_paired_line(x, y))
+        {
+            let _ = writeln!(out, "- {line}");
+        }
+    }
+    if out.is_empty() {
+        out
+    } else {
+        format!("\n{out}")
+    }
+}
 
 /// The Figure 5 table: one section per task, rows in legend order.
 pub fn fig5_table(tasks: &[Fig5Task]) -> String {
@@ -340,6 +438,7 @@ pub fn fig5_table(tasks: &[Fig5Task]) -> String {
                 m.final_alignment.n,
             );
         }
+        out.push_str(&fig5_paired(task));
     }
     out
 }

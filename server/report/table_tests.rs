@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::report::aggregate::{Curve, Fig3Method as Fig3Row, Fig5Method as Fig5Row};
+use crate::report::stats::mean_se;
 use crate::sim::Task;
 
 fn ms(mean: f64, se: f64, n: usize) -> MeanSe {
@@ -201,6 +202,7 @@ fn report_fig5_table_lists_both_alignments_and_segment_length() {
             ..Curve::default()
         },
         final_alignment: ms(a, 0.02, 5),
+        finals_by_seed: Vec::new(),
         final_alignment_of_mean: ms(a + 0.05, 0.01, 5),
         segment_length: ms(len, 0.5, 5),
     };
@@ -217,4 +219,130 @@ fn report_fig5_table_lists_both_alignments_and_segment_length() {
 | Random fragment | 0.410 ± 0.020 | 0.460 ± 0.010 | 12.0 ± 0.5 | 5 |
 ";
     assert!(text.ends_with(expected), "got:\n{text}");
+}
+
+fn fig5_row(method: &str, finals_by_seed: &[(u64, f64)]) -> Fig5Row {
+    let finals: Vec<f64> = finals_by_seed.iter().map(|&(_, a)| a).collect();
+    Fig5Row {
+        method: method.into(),
+        curve: Curve {
+            x: vec![1.0, 40.0],
+            ..Curve::default()
+        },
+        final_alignment: mean_se(&finals),
+        finals_by_seed: finals_by_seed.to_vec(),
+        final_alignment_of_mean: ms(0.5, 0.01, finals.len()),
+        segment_length: ms(10.0, 0.5, finals.len()),
+    }
+}
+
+/// DRPL has seeds 0-5, the baseline 1-6 (listed out of order): only seeds 1-5 pair, each with
+/// its own seed. Differences +0.05, +0.04, +0.03, +0.02, -0.045: ranks 5, 3, 2, 1 above and 4
+/// below, R+ = 11, exact one-sided p = P(R+ >= 11 | n = 5) = 7/32. Paired by position instead,
+/// DRPL would win 1 of 6.
+#[test]
+fn report_fig5_paired_test_pairs_by_seed_over_the_seeds_both_rows_have() {
+    let drpl = fig5_row(
+        "drpl",
+        &[
+            (0, 0.50),
+            (1, 0.60),
+            (2, 0.70),
+            (3, 0.80),
+            (4, 0.90),
+            (5, 0.95),
+        ],
+    );
+    let ss = fig5_row(
+        "drpl-ss",
+        &[
+            (6, 0.10),
+            (3, 0.77),
+            (1, 0.55),
+            (5, 0.995),
+            (2, 0.66),
+            (4, 0.88),
+        ],
+    );
+    let line = fig5_paired_line(&drpl, &ss).unwrap();
+    assert_eq!(
+        line,
+        "DRPL above DRPL-SS: one-sided paired Wilcoxon signed-rank over 5 seeds (paired by seed), \
+         mean difference +0.019 ± 0.017, wins 4 of 5, p = 0.219."
+    );
+    // The other way round: the same pairs, the other tail, P(R+ >= 4 | n = 5) = 27/32.
+    let back = fig5_paired_line(&ss, &drpl).unwrap();
+    assert!(
+        back.starts_with("DRPL-SS above DRPL: one-sided paired Wilcoxon signed-rank over 5 seeds"),
+        "{back}"
+    );
+    assert!(
+        back.ends_with("mean difference -0.019 ± 0.017, wins 1 of 5, p = 0.844."),
+        "{back}"
+    );
+    // No seed in common: no test.
+    let elsewhere = fig5_row("full", &[(7, 0.1), (8, 0.2)]);
+    assert_eq!(fig5_paired_line(&drpl, &elsewhere), None);
+}
+
+/// 20 seeds all above: p = 2^-20, as scipy's `wilcoxon(d, alternative="greater")` gives
+/// (docs/results/fig5/ablations/paired.md: 9.5e-07); all below: p = 1.
+#[test]
+fn report_fig5_paired_test_reads_the_direction_of_the_difference() {
+    let hi: Vec<(u64, f64)> = (0..20).map(|s| (s, 0.9 + 0.001 * s as f64)).collect();
+    let lo: Vec<(u64, f64)> = (0..20).map(|s| (s, 0.5 - 0.01 * s as f64)).collect();
+    let (mi, full) = (fig5_row("drpl-mi", &hi), fig5_row("full", &lo));
+    let up = fig5_paired_line(&mi, &full).unwrap();
+    assert!(
+        up.starts_with(
+            "DRPL-MI above Full trajectory: one-sided paired Wilcoxon signed-rank over 20 seeds"
+        ),
+        "{up}"
+    );
+    assert!(up.ends_with("wins 20 of 20, p = 9.5e-7."), "{up}");
+    let down = fig5_paired_line(&full, &mi).unwrap();
+    assert!(down.ends_with("wins 0 of 20, p = 1.000."), "{down}");
+}
+
+/// The table tests DRPL and DRPL-MI against each baseline it has, and DRPL-MI against DRPL; a
+/// missing row gets no line, and a baseline is never tested against DRPL.
+#[test]
+fn report_fig5_table_lists_the_paired_tests_of_the_rows_it_has() {
+    let seeds = |level: f64| -> Vec<(u64, f64)> {
+        // Distinct differences (no ties): (level - other) * (1 + s / 1000).
+        (0..6)
+            .map(|s| (s, level * (1.0 + 0.001 * s as f64)))
+            .collect()
+    };
+    let text = fig5_table(&[Fig5Task {
+        task: Task::Reaching,
+        methods: vec![
+            fig5_row("drpl", &seeds(0.8)),
+            fig5_row("drpl-ss", &seeds(0.7)),
+            fig5_row("full", &seeds(0.6)),
+            fig5_row("drpl-mi", &seeds(0.9)),
+        ],
+    }]);
+    let lines: Vec<&str> = text
+        .lines()
+        .filter(|l| l.starts_with("- "))
+        .map(|l| l.split(':').next().unwrap())
+        .collect();
+    assert_eq!(
+        lines,
+        [
+            "- DRPL above DRPL-SS",
+            "- DRPL above Full trajectory",
+            "- DRPL-MI above DRPL-SS",
+            "- DRPL-MI above Full trajectory",
+            "- DRPL-MI above DRPL",
+        ],
+        "{text}"
+    );
+    assert!(
+        text.contains("| DRPL-MI (ours: mutual-information pick) | 0.902 ± "),
+        "{text}"
+    );
+    // Every row 0.1 above the next on every seed: 6 of 6, p = 1/64.
+    assert_eq!(text.matches("wins 6 of 6, p = 0.016.").count(), 5, "{text}");
 }

@@ -78,7 +78,9 @@ impl fmt::Display for SessionMethod {
 
 /// A method name that is none of ours (the name as given).
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("unknown method {0:?}: expected dref, ef-<percent>, sac, drpl, drpl-ss, fragment or full")]
+#[error(
+    "unknown method {0:?}: expected dref, ef-<percent>, sac, drpl, drpl-mi, drpl-ss, fragment or full"
+)]
 pub struct UnknownMethod(pub String);
 
 impl FromStr for SessionMethod {

@@ -96,7 +96,7 @@ impl Family {
     fn methods(self) -> &'static str {
         match self {
             Family::Evaluative => "evaluative methods (dref, ef-<p>, sac)",
-            Family::Preference => "preference methods (drpl, drpl-ss, fragment, full)",
+            Family::Preference => "preference methods (drpl, drpl-mi, drpl-ss, fragment, full)",
         }
     }
 }

@@ -179,6 +179,33 @@ fn preference_settings_reach_the_run() {
     assert_eq!(c.seed, 3);
 }
 
+/// `drpl-mi` defaults to the mutual-information pick; an `acquisition` setting wins over it,
+/// so `drpl-mi` with `acquisition=uniform` is the paper's DRPL but for its name.
+#[test]
+fn drpl_mi_defaults_to_mutual_information_and_a_setting_wins() {
+    let none = Settings::from_pairs(std::iter::empty::<(&str, &str)>()).unwrap();
+    let mi = none
+        .preference(Task::Placing, QueryMethod::DrplMi, 4)
+        .unwrap();
+    assert_eq!(mi.acquisition, Acquisition::MutualInformation);
+    let drpl = none
+        .preference(Task::Placing, QueryMethod::Drpl, 4)
+        .unwrap();
+    assert_eq!(drpl.acquisition, Acquisition::Uniform);
+    let uniform = Settings::from_pairs([("acquisition", "uniform")])
+        .unwrap()
+        .preference(Task::Placing, QueryMethod::DrplMi, 4)
+        .unwrap();
+    assert_eq!(uniform.acquisition, Acquisition::Uniform);
+    assert_eq!(
+        PreferenceRunConfig {
+            method: QueryMethod::Drpl,
+            ..uniform
+        },
+        drpl
+    );
+}
+
 #[test]
 fn preference_settings_override_by_name_and_reject_nonsense() {
     let settings = |pairs: &[(&str, &str)]| Settings::from_pairs(pairs.iter().copied());

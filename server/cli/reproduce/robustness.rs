@@ -50,7 +50,7 @@ fn config(args: &ReproduceArgs) -> anyhow::Result<RobustnessConfig> {
             .is_err()
     }) {
         bail!(
-            "unknown method {bad:?} for robustness: expected dref, sac, ef-<p>, drpl, drpl-ss, fragment or full"
+            "unknown method {bad:?} for robustness: expected dref, sac, ef-<p>, drpl, drpl-ss, fragment, full or drpl-mi"
         );
     }
     let mut tasks = if args.tasks.is_empty() {

@@ -50,7 +50,8 @@ fn method_color(method: &str) -> RGBColor {
         Some(Fig3Method::DrefAuthors) => Some(6),
         Some(Fig3Method::DrefMasked | Fig3Method::SacUnscaled) => None,
         Some(kind) => kind.published_column(),
-        None => Some(order_key(method).0).filter(|rank| *rank < 4),
+        // Figure 5's four and DRPL-MI after them.
+        None => Some(order_key(method).0).filter(|rank| *rank < 5),
     };
     if let Some(slot) = slot {
         return TAB10[slot];
@@ -232,6 +233,7 @@ mod tests {
     fn report_known_methods_keep_the_papers_colours() {
         assert_eq!(method_color("dref"), TAB10[0]);
         assert_eq!(method_color("drpl"), TAB10[0]);
+        assert_eq!(method_color("drpl-mi"), TAB10[4]);
         assert_eq!(method_color("sac"), TAB10[4]);
         assert_eq!(method_color("ef-2.5"), TAB10[5]);
         assert_eq!(method_color("dref-authors"), TAB10[6]);

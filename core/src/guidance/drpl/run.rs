@@ -54,7 +54,8 @@ pub struct PreferenceRunConfig {
 }
 
 impl PreferenceRunConfig {
-    /// algorithms.md's defaults for `task` and `method`, uniform acquisition (the paper's).
+    /// algorithms.md's defaults for `task` and `method`: uniform acquisition (the paper's),
+    /// mutual information for DRPL-MI ([`QueryMethod::default_acquisition`]).
     pub fn new(task: Task, method: QueryMethod, seed: u64) -> Self {
         Self {
             task: task.into(),
@@ -63,7 +64,7 @@ impl PreferenceRunConfig {
             trajectories: DEFAULT_TRAJECTORIES,
             max_steps: trajectories::max_steps(task),
             min_run: DEFAULT_MIN_RUN,
-            acquisition: Acquisition::Uniform,
+            acquisition: method.default_acquisition(),
             belief: BeliefConfig::default(),
             scene_graph: SceneGraph::for_task(task),
             env: EnvOptions {
@@ -362,6 +363,33 @@ mod tests {
             pool(),
         );
         assert_ne!(other.theta_true(), run.theta_true());
+    }
+
+    /// DRPL-MI is DRPL with the mutual-information pick and nothing else: the same config but
+    /// for its name, and, query by query, the same pairs, answers and posterior.
+    #[test]
+    fn drpl_mi_is_drpl_with_the_mutual_information_pick() {
+        let mi = PreferenceRunConfig::new(Task::Reaching, QueryMethod::DrplMi, 9);
+        assert_eq!(mi.acquisition, Acquisition::MutualInformation);
+        let mut drpl = PreferenceRunConfig::new(Task::Reaching, QueryMethod::Drpl, 9);
+        assert_eq!(drpl.acquisition, Acquisition::Uniform);
+        drpl.acquisition = Acquisition::MutualInformation;
+        assert_eq!(
+            PreferenceRunConfig {
+                method: QueryMethod::Drpl,
+                ..mi.clone()
+            },
+            drpl
+        );
+        let mut a = PreferenceRun::with_pool(mi, pool());
+        let mut b = PreferenceRun::with_pool(drpl, pool());
+        let mut oracle = SyntheticOracle::new(a.theta_true().to_vec());
+        for _ in 0..5 {
+            let (ra, rb) = (a.step(&mut oracle).unwrap(), b.step(&mut oracle).unwrap());
+            assert_eq!((&ra.pair, ra.preference), (&rb.pair, rb.preference));
+            assert_eq!(ra.alignment, rb.alignment);
+        }
+        assert_eq!(a.belief().mean(), b.belief().mean());
     }
 
     /// Skips count as queries but teach the belief nothing.

@@ -2,6 +2,9 @@
 //!
 //! - DRPL: two segments whose abstract states differ in the cycled predicate i, at Hamming
 //!   distance 1 if possible (see `state_pairs`).
+//! - DRPL-MI (ours, not the paper's): DRPL's candidates, picked by mutual information; the
+//!   same as DRPL with `Acquisition::MutualInformation` (its default, see
+//!   [`QueryMethod::default_acquisition`]).
 //! - DRPL-SS: two segments with the same abstract state.
 //! - Random fragment: two windows of DRPL's mean segment length from two random trajectories.
 //! - Full trajectory: two random whole trajectories.
@@ -33,14 +36,17 @@ const WINDOW_TRIES: usize = 1000;
 #[serde(rename_all = "kebab-case")]
 pub enum QueryMethod {
     Drpl,
+    /// DRPL whose run defaults to the mutual-information pick among its candidates.
+    DrplMi,
     DrplSs,
     Fragment,
     Full,
 }
 
 impl QueryMethod {
-    pub const ALL: [QueryMethod; 4] = [
+    pub const ALL: [QueryMethod; 5] = [
         QueryMethod::Drpl,
+        QueryMethod::DrplMi,
         QueryMethod::DrplSs,
         QueryMethod::Fragment,
         QueryMethod::Full,
@@ -49,9 +55,21 @@ impl QueryMethod {
     pub fn id(self) -> &'static str {
         match self {
             QueryMethod::Drpl => "drpl",
+            QueryMethod::DrplMi => "drpl-mi",
             QueryMethod::DrplSs => "drpl-ss",
             QueryMethod::Fragment => "fragment",
             QueryMethod::Full => "full",
+        }
+    }
+
+    /// The final pick a run of this method makes unless told otherwise: mutual information for
+    /// DRPL-MI, the paper's uniform pick for the others. An `acquisition` setting wins over it.
+    pub fn default_acquisition(self) -> Acquisition {
+        match self {
+            QueryMethod::DrplMi => Acquisition::MutualInformation,
+            QueryMethod::Drpl | QueryMethod::DrplSs | QueryMethod::Fragment | QueryMethod::Full => {
+                Acquisition::Uniform
+            }
         }
     }
 }
@@ -64,7 +82,7 @@ impl fmt::Display for QueryMethod {
 
 /// A name that is no [`QueryMethod`].
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("unknown preference method {0:?}: expected drpl, drpl-ss, fragment or full")]
+#[error("unknown preference method {0:?}: expected drpl, drpl-mi, drpl-ss, fragment or full")]
 pub struct UnknownQueryMethod(pub String);
 
 impl FromStr for QueryMethod {
@@ -144,7 +162,7 @@ impl Selector {
         belief: &Belief,
     ) -> Option<QueryPair> {
         let mut space = match self.method {
-            QueryMethod::Drpl => Space::Segments(Candidates::drpl(
+            QueryMethod::Drpl | QueryMethod::DrplMi => Space::Segments(Candidates::drpl(
                 &self.groups,
                 dim,
                 query_index,
