@@ -15,6 +15,10 @@ out=${2:?the scratch folder}
 run() { nice -n 10 "$bin" --threads 1 reproduce fig3 --jobs 1 "$@"; }
 
 lane_a() {
+  # The candidate since 2026-11-26 09:10 (docs/dref.md): the silence wake with the anchored
+  # masked critic; Reaching seeds 6 and 7 asked 0.26-0.35 % for 0.91-0.99 of EF-100.
+  run --tasks reaching,placing --seeds 10 --methods dref --set rank_window=0 --set wake_after=1000 \
+    --set human_critic_anchor=0.1 --out "$out/ablation-wake-anchor"
   # The silence wake, the candidate for `dref` (docs/dref.md: Placing seed 3 learnt at 0.54 %
   # where the recent rank failed at 8.8 %): its rows on both tasks.
   run --tasks placing,reaching --seeds 10 --methods dref --set rank_window=0 --set wake_after=1000 --out "$out/ablation-wake"
