@@ -204,7 +204,7 @@ impl Settings {
         let shared = Settings {
             session: SessionSection::offered(),
             teacher: TeacherSection::offered(),
-            scene_graph: SceneGraphSection::offered(task, family),
+            scene_graph: SceneGraphSection::offered(task),
             ..Settings::default()
         };
         match family {

@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{Family, SceneGraphChoice, SettingsError};
+use super::{SceneGraphChoice, SettingsError};
 use crate::scene_graph::SceneGraph;
 use crate::sim::{EnvOptions, GripObservation, PlacingSuccess, Start, Task, TaskRef, Variant};
 
@@ -42,14 +42,15 @@ pub struct EnvSection {
 }
 
 impl SceneGraphSection {
-    /// Lunar Lander's side-engine test for both families; Placing's graph for evaluative runs
-    /// (a preference run's graph is the head's).
-    pub(super) fn offered(task: Task, family: Family) -> Self {
+    /// Lunar Lander's side-engine test and Placing's graph, for both families (DRPL cuts its
+    /// segments where the graph changes, so the authors' as-run graph is one of its ablations:
+    /// `docs/results/fig5/ablations/scene_graph-as-run/`).
+    pub(super) fn offered(task: Task) -> Self {
         let side_engines_on_a0 = match SceneGraph::for_task(task) {
             SceneGraph::LunarLander { side_engines_on_a0 } => Some(side_engines_on_a0),
             _ => None,
         };
-        let placing_graph = task == Task::Placing && family == Family::Evaluative;
+        let placing_graph = task == Task::Placing;
         Self {
             side_engines_on_a0,
             scene_graph: placing_graph.then_some(SceneGraphChoice::Head),
