@@ -95,11 +95,23 @@ fn fast_paths_counted_over_the_process() {
         for threads in [1, 2] {
             kernels::with_path(path, || {
                 kernels::with_threads(threads, || {
-                    allocations_of_updates(path, |f| count_all_threads(f))
+                    allocations_of_updates(path, fewest_over_the_process)
                 });
             });
         }
     }
+}
+
+/// The process-wide count of the fewest allocations in three windows of the same work. An
+/// update allocates the same every time, so a window of 0 proves it allocates nothing; another
+/// thread of the test harness can allocate during any one window (libtest's main thread records
+/// the running test just after starting it, and on a machine loaded enough it gets there late),
+/// so one window alone can fail a correct update.
+fn fewest_over_the_process(f: &mut dyn FnMut()) -> (usize, isize) {
+    (0..3)
+        .map(|_| count_all_threads(&mut *f))
+        .min_by_key(|&(allocations, _)| allocations)
+        .expect("three windows")
 }
 
 /// Checks the allocations `count` sees during two updates, after a first.
