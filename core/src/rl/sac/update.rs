@@ -147,10 +147,13 @@ impl Sac {
             _ => return None,
         };
         let batch = &self.buffers.batch;
-        let config = self.config.human_critic.as_ref();
-        let mask = config
-            .is_some_and(|c| c.mask)
-            .then(|| config.map_or(0.0, |c| c.anchor));
+        // Masked: the anchor's weight (0 for the plain mask); unmasked: None.
+        let mask = self
+            .config
+            .human_critic
+            .as_ref()
+            .filter(|c| c.mask)
+            .map(|c| c.anchor);
         if mask == Some(0.0) && batch.human.iter().all(|&h| h == 0.0) {
             return None;
         }
