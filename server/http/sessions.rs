@@ -13,7 +13,7 @@ use crate::api::error::{ApiError, ApiResult, ErrorBody};
 use crate::export::answers_csv::answers_csv;
 use crate::export::session_jsonl::{SessionRecords, session_jsonl};
 use crate::remote_env::RemoteTarget;
-use crate::session::spec::DEFAULT_QUERIES;
+use crate::session::spec::{DEFAULT_QUERIES, default_steps};
 use crate::session::{SessionMethod, SessionSpec, TrainerKind};
 use crate::settings::Settings;
 use crate::sim::Task;
@@ -81,10 +81,7 @@ impl LaunchRequest {
                     self.method
                 )));
             }
-            self.steps.unwrap_or(match self.task {
-                Some(Task::LunarLander) => 150_000,
-                Some(Task::Reaching | Task::Placing) | None => 100_000,
-            })
+            self.steps.unwrap_or_else(|| default_steps(self.task))
         };
         Ok(SessionSpec {
             task: self.task,

@@ -27,6 +27,15 @@ pub const REMOTE_TASK: &str = "remote";
 /// Preference queries when the launch request names none (Figure 5's budget).
 pub const DEFAULT_QUERIES: usize = 40;
 
+/// Environment steps of an evaluative session whose launch names none: the paper's for the task
+/// (a remote env's own task gets Reaching's).
+pub fn default_steps(task: Option<Task>) -> u64 {
+    match task {
+        Some(Task::LunarLander) => 150_000,
+        Some(Task::Reaching | Task::Placing) | None => 100_000,
+    }
+}
+
 /// Who answers the session's queries.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]

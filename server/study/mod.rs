@@ -6,10 +6,12 @@
 //! come back is in [`crate::report::within_subject`].
 
 pub mod ordering;
+pub mod spec;
 
 use serde::{Deserialize, Serialize};
 
 pub use self::ordering::Ordering;
+pub use self::spec::{Condition, StudySpec, StudySpecError};
 
 /// A within-subject study's design: the conditions (method names) and how to order them.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]

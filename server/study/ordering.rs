@@ -24,10 +24,11 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 /// How a study orders its conditions for each participant.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Ordering {
     /// Rows of a Williams design ([`williams_rows`]), participant i on row i mod rows.
+    #[default]
     Williams,
     /// A seeded shuffle per participant ([`random_order`]).
     Random,
