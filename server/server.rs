@@ -84,6 +84,7 @@ impl Server {
                 web_dir: config.web_dir,
                 data_dir: config.data_dir,
                 cors_origins: config.cors_origins,
+                study_launches: Default::default(),
             },
             grace: config.shutdown_grace,
             interrupted,

@@ -3,39 +3,11 @@
 
 use std::time::{Duration, Instant};
 
+use crate::support::rest::call;
 use crate::support::server::{TOKEN, state, state_with};
-use axum::body::Body;
-use axum::http::{Request, StatusCode, header};
+use axum::http::StatusCode;
 use dualrep::http::{app, openapi};
-use http_body_util::BodyExt;
 use serde_json::{Value, json};
-use tower::ServiceExt;
-
-struct Reply {
-    status: StatusCode,
-    content_type: String,
-    body: Vec<u8>,
-}
-
-impl Reply {
-    fn json(&self) -> Value {
-        serde_json::from_slice(&self.body)
-            .unwrap_or_else(|e| panic!("not JSON ({e}): {}", String::from_utf8_lossy(&self.body)))
-    }
-
-    /// The JSON error shape with this status and code.
-    fn assert_error(&self, status: StatusCode, code: &str) {
-        assert_eq!(
-            self.status,
-            status,
-            "{}",
-            String::from_utf8_lossy(&self.body)
-        );
-        let v = self.json();
-        assert_eq!(v["error"]["code"], code, "{v}");
-        assert!(!v["error"]["message"].as_str().unwrap().is_empty());
-    }
-}
 
 /// The session once it is neither queued nor running (a minute at most).
 async fn settled(router: &axum::Router, id: &str) -> Value {
@@ -55,42 +27,6 @@ async fn settled(router: &axum::Router, id: &str) -> Value {
         }
         assert!(start.elapsed() < Duration::from_secs(60), "{s}");
         tokio::time::sleep(Duration::from_millis(20)).await;
-    }
-}
-
-async fn call(
-    router: &axum::Router,
-    method: &str,
-    uri: &str,
-    token: Option<&str>,
-    body: Option<&str>,
-) -> Reply {
-    let mut b = Request::builder().method(method).uri(uri);
-    if let Some(t) = token {
-        b = b.header(header::AUTHORIZATION, format!("Bearer {t}"));
-    }
-    if body.is_some() {
-        b = b.header(header::CONTENT_TYPE, "application/json");
-    }
-    let request = b.body(Body::from(body.unwrap_or("").to_string())).unwrap();
-    let response = router.clone().oneshot(request).await.unwrap();
-    let status = response.status();
-    let content_type = response
-        .headers()
-        .get(header::CONTENT_TYPE)
-        .map(|v| v.to_str().unwrap().to_string())
-        .unwrap_or_default();
-    let body = response
-        .into_body()
-        .collect()
-        .await
-        .unwrap()
-        .to_bytes()
-        .to_vec();
-    Reply {
-        status,
-        content_type,
-        body,
     }
 }
 
@@ -202,7 +138,7 @@ async fn bad_launch_requests_get_clear_errors_and_nothing_is_stored() {
 }
 
 /// The API's operations: the document is generated from the router, so this pins the surface.
-const OPERATIONS: [(&str, &str); 23] = [
+const OPERATIONS: [(&str, &str); 33] = [
     ("post", "/api/sessions"),
     ("get", "/api/sessions"),
     ("get", "/api/sessions/{id}"),
@@ -222,6 +158,22 @@ const OPERATIONS: [(&str, &str); 23] = [
     ("get", "/api/sessions/{id}/dataset.parquet"),
     ("get", "/api/sessions/{id}/posterior.safetensors"),
     ("get", "/api/sessions/{id}/policy.safetensors"),
+    ("post", "/api/studies"),
+    ("get", "/api/studies"),
+    ("get", "/api/studies/{id}"),
+    ("get", "/api/studies/{id}/results"),
+    ("get", "/api/studies/{id}/table"),
+    ("post", "/api/study-links/{link}/participants"),
+    ("get", "/api/study-links/{link}/participants/{token}"),
+    (
+        "post",
+        "/api/study-links/{link}/participants/{token}/consent",
+    ),
+    ("post", "/api/study-links/{link}/participants/{token}/start"),
+    (
+        "post",
+        "/api/study-links/{link}/participants/{token}/survey",
+    ),
     ("get", "/api/tasks"),
     ("get", "/api/openapi.json"),
     ("get", "/healthz"),
@@ -309,12 +261,16 @@ async fn the_openapi_document_lists_exactly_the_routes() {
         let expect_public = matches!(
             path,
             "/api/tasks" | "/api/openapi.json" | "/healthz" | "/ws/sessions/{id}"
-        );
+        ) || path.starts_with("/api/study-links/");
         assert_eq!(public, expect_public, "{method} {path}");
     }
     // Every documented route answers something other than the API's 404.
     for (method, path) in OPERATIONS {
-        let uri = path.replace("{id}", "nosuch").replace("{episode}", "0");
+        let uri = path
+            .replace("{id}", "nosuch")
+            .replace("{episode}", "0")
+            .replace("{link}", "nosuch")
+            .replace("{token}", "nosuch");
         let r = call(&router, &method.to_uppercase(), &uri, Some(TOKEN), None).await;
         let unrouted = r.status == StatusCode::NOT_FOUND
             && r.json()["error"]["message"]

@@ -25,4 +25,7 @@ pub struct AppState {
     pub data_dir: PathBuf,
     /// Origins allowed to call the API from other sites (none by default).
     pub cors_origins: Vec<HeaderValue>,
+    /// Held while a study participant's session is launched and linked, so that two clicks
+    /// on "start" cannot launch a condition twice.
+    pub study_launches: Arc<tokio::sync::Mutex<()>>,
 }

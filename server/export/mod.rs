@@ -10,4 +10,5 @@ pub mod answers_csv;
 pub mod policy;
 pub mod session;
 pub mod session_jsonl;
+pub mod study_table;
 pub mod tables;

@@ -110,7 +110,8 @@ impl Common {
     }
 }
 
-fn write(columns: Vec<(&str, ArrayRef, bool)>) -> Result<Vec<u8>, TableError> {
+/// One record batch of `columns` (name, values, nullable) as a Parquet file.
+pub(crate) fn write(columns: Vec<(&str, ArrayRef, bool)>) -> Result<Vec<u8>, TableError> {
     let batch = RecordBatch::try_from_iter_with_nullable(columns)?;
     let mut bytes = Vec::new();
     let mut writer = ArrowWriter::try_new(&mut bytes, batch.schema(), None)?;

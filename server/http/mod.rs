@@ -6,6 +6,9 @@
 //! - `trainers`: named trainers (invite, join by name), the per-trainer breakdown, agreement;
 //!   `trainer_views` builds those views.
 //! - `datasets`: a session's Parquet table, posterior and policy files.
+//! - `studies`: human-subject studies for researchers (create, list, who is where, results,
+//!   the tidy table); `participants`: a study's participants from its one link (join, consent,
+//!   start each condition, survey); `study_runs` reads both from the store.
 //! - `tasks`, `openapi`: self-description.
 //! - `json_body`: request bodies whose errors name the field that was wrong (who may call, the
 //!   JSON error shape and the state handlers reach are in [`crate::api`], shared with `ws`).
@@ -14,8 +17,11 @@
 pub mod datasets;
 pub mod json_body;
 pub mod openapi;
+pub mod participants;
 pub mod security_headers;
 pub mod sessions;
+pub mod studies;
+pub mod study_runs;
 pub mod tasks;
 pub mod trainer_views;
 pub mod trainers;
@@ -67,12 +73,21 @@ fn researcher_routes() -> OpenApiRouter<AppState> {
         .routes(routes!(datasets::dataset))
         .routes(routes!(datasets::posterior))
         .routes(routes!(datasets::policy))
+        .routes(routes!(studies::create, studies::list))
+        .routes(routes!(studies::get))
+        .routes(routes!(studies::results))
+        .routes(routes!(studies::table))
 }
 
 fn public_routes() -> OpenApiRouter<AppState> {
     OpenApiRouter::new()
         .routes(routes!(sessions::survey))
         .routes(routes!(trainers::join))
+        .routes(routes!(participants::join))
+        .routes(routes!(participants::get))
+        .routes(routes!(participants::consent))
+        .routes(routes!(participants::start))
+        .routes(routes!(participants::survey))
         .routes(routes!(tasks::tasks))
         .routes(routes!(openapi::openapi))
         .routes(routes!(healthz))
@@ -94,10 +109,15 @@ pub fn app(state: AppState) -> Router {
         Some(web) => router
             .route_service("/train/{id}", ServeFile::new(web.join("train.html")))
             .route_service("/review/{id}", ServeFile::new(web.join("review.html")))
+            .route_service(
+                "/study/{link}",
+                ServeFile::new(web.join("participate.html")),
+            )
             .fallback_service(ServeDir::new(web)),
         None => router
             .route("/train/{id}", get(|| shipped_page("train.html")))
             .route("/review/{id}", get(|| shipped_page("review.html")))
+            .route("/study/{link}", get(|| shipped_page("participate.html")))
             .fallback(shipped_file),
     };
     let mut router = router

@@ -25,6 +25,7 @@ use crate::api::error::{ErrorBody, ErrorDetail};
         (name = "sessions", description = "Launch, watch, stop and resume training sessions; their answers, episodes and recordings"),
         (name = "trainers", description = "Trainers as people: what a trainer's link reaches (the websocket, joining by name, the survey), named trainers, the session per trainer and their agreement"),
         (name = "datasets", description = "A session's data for other tools: Parquet tables, the posterior and the policy as safetensors"),
+        (name = "studies", description = "Human-subject studies: conditions in a counterbalanced order per participant from one link, surveys, results and within-subject tests"),
         (name = "service", description = "Self-description and health")
     )
 )]

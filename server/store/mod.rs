@@ -12,6 +12,8 @@
 //! - `trainers`: named trainers, each one's own answers (sessions that combine several per
 //!   query) and surveys.
 //! - `alignments`: a preference session's alignment after every answer.
+//! - `studies`: studies, their participants, each participant's session per condition, and
+//!   their survey answers.
 
 /// The current time as the RFC 3339 text every table stores (UTC, milliseconds), as a literal
 /// for `concat!`: sqlx takes only static SQL.
@@ -29,6 +31,7 @@ mod episodes;
 mod queries;
 mod revisions;
 mod sessions;
+mod studies;
 mod surveys;
 mod trainers;
 
@@ -46,6 +49,7 @@ pub use episodes::EpisodeRow;
 pub use queries::{AnswerCounts, AnswerRow, CommitOutcome, QueryRow, SyntheticAnswer};
 pub use revisions::{ReanswerOutcome, UndoOutcome};
 pub use sessions::{NewSession, SessionRow, Status, StoredSpecError};
+pub use studies::{ParticipantRow, StudyAnswerRow, StudyRow, StudySessionRow, SurveyOutcome};
 pub use surveys::{Survey, SurveyError};
 pub use trainers::{
     AddTrainer, NameError, PersonAnswer, TrainerOrigin, TrainerRef, TrainerRow, VoteOutcome,

@@ -1,11 +1,16 @@
 //! Human-subject studies, the paper's Figures 4 and 6: within-subject, every participant trains
 //! with every method in a counterbalanced order, then answers a Likert survey.
 //!
-//! Only the pure pieces live here (no IO): [`StudyDesign`] says which conditions a study compares
-//! and in which order each participant meets them ([`ordering`]). The analysis of the scores that
-//! come back is in [`crate::report::within_subject`].
+//! Only the pure pieces live here (no IO): [`StudySpec`] is what a researcher launches
+//! ([`spec`]: conditions, budget, survey, consent); [`StudyDesign`] says which conditions a
+//! study compares and in which order each participant meets them ([`ordering`]); [`progress`]
+//! derives where a participant is from what is stored; [`results`] turns what participants did
+//! into Figure 4's numbers and the within-subject tests ([`crate::report::within_subject`]).
+//! The routes are `http::studies` and `http::participants`.
 
 pub mod ordering;
+pub mod progress;
+pub mod results;
 pub mod spec;
 
 use serde::{Deserialize, Serialize};

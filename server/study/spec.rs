@@ -96,9 +96,18 @@ impl Question {
 /// ease C, each on a 5-point scale.
 pub fn paper_survey() -> Vec<Question> {
     vec![
-        Question::likert("E", "Overall, training the robot this way was a good experience."),
-        Question::likert("I", "The robot seemed intelligent: it asked at the right moments."),
-        Question::likert("C", "Training the robot this way was easy: it took little effort."),
+        Question::likert(
+            "E",
+            "Overall, training the robot this way was a good experience.",
+        ),
+        Question::likert(
+            "I",
+            "The robot seemed intelligent: it asked at the right moments.",
+        ),
+        Question::likert(
+            "C",
+            "Training the robot this way was easy: it took little effort.",
+        ),
     ]
 }
 
@@ -147,7 +156,9 @@ pub enum StudySpecError {
     Design(#[from] DesignError),
     #[error("conditions[{index}].name: must not be empty")]
     EmptyConditionName { index: usize },
-    #[error("conditions: all must have the same kind of budget, but {evaluative:?} counts steps and {preference:?} queries")]
+    #[error(
+        "conditions: all must have the same kind of budget, but {evaluative:?} counts steps and {preference:?} queries"
+    )]
     MixedBudgets {
         evaluative: String,
         preference: String,
@@ -288,7 +299,10 @@ impl StudySpec {
             env: None,
             method: condition.method,
             trainer: TrainerKind::Human,
-            seed: self.seed.wrapping_mul(1_000_003).wrapping_add(participant as u64),
+            seed: self
+                .seed
+                .wrapping_mul(1_000_003)
+                .wrapping_add(participant as u64),
             budget,
             params: condition.settings(index)?,
         })
@@ -346,7 +360,11 @@ mod tests {
         );
         let mut v = figure4();
         v["conditions"][1] = json!({"name": "drpl", "task": "reaching", "method": "drpl"});
-        assert!(spec(v).unwrap_err().contains("\"dref\" counts steps and \"drpl\" queries"));
+        assert!(
+            spec(v)
+                .unwrap_err()
+                .contains("\"dref\" counts steps and \"drpl\" queries")
+        );
         let mut v = figure4();
         v["survey"] = json!([{"id": "E", "text": "ok", "points": 1}]);
         assert_eq!(

@@ -6,6 +6,7 @@ pub mod py_venv;
 pub mod pyarrow_py;
 pub mod python_client;
 pub mod rerun_py;
+pub mod rest;
 pub mod server;
 pub mod slurm_cluster;
 pub mod trainer;

@@ -39,6 +39,7 @@ pub async fn state_with(dir: &std::path::Path, tweak: impl FnOnce(&mut HubConfig
         web_dir: Some(root().join("web")),
         data_dir: dir.to_path_buf(),
         cors_origins: vec![],
+        study_launches: Default::default(),
     }
 }
 
