@@ -3,9 +3,11 @@
 //!
 //! Only the pure pieces live here (no IO): [`StudyDesign`] says which conditions a study compares
 //! and in which order each participant meets them ([`ordering`]). The analysis of the scores that
-//! come back is in [`crate::report::within_subject`].
+//! come back is in [`crate::report::within_subject`]; [`pilot`] estimates a study's power
+//! before anyone is recruited, with simulated participants.
 
 pub mod ordering;
+pub mod pilot;
 pub mod spec;
 
 use serde::{Deserialize, Serialize};
