@@ -25,5 +25,6 @@ mod security_headers;
 mod session_recording;
 mod slurm;
 mod store;
+mod study_pilot;
 mod train_e2e;
 mod ws_sessions;
