@@ -69,6 +69,10 @@ fn a_pilot_trains_its_pool_and_reports_power_for_each_n() {
     assert_eq!(report["studies"], 50);
     assert_eq!(report["measure"], "cumulative_reward");
     assert_eq!(report["contrast"], serde_json::json!(["ef-100", "sac"]));
+    assert_eq!(
+        report["teachers"],
+        serde_json::json!({"teacher_beta": [0.5, 5.0], "teacher_error": [0.0, 0.2]})
+    );
     let power = report["power"].as_array().unwrap();
     let ns: Vec<u64> = power.iter().map(|r| r["n"].as_u64().unwrap()).collect();
     assert_eq!(ns, [4, 6, 8]);

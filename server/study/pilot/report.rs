@@ -9,7 +9,7 @@ use serde_json::{Map, Value};
 use super::PilotSpec;
 use super::power::{PowerPlan, PowerRow, estimate};
 use super::simulate::{PilotRun, Score};
-use super::teachers::{TEACHER_KEYS, TeacherRange};
+use super::teachers::{TEACHER_KEYS, TeacherRange, TeacherRanges};
 use crate::report::stats::{MeanSe, mean_se};
 use crate::report::within_subject::{Alternative, Wilcoxon, wilcoxon};
 use crate::session::plan::RunConfig;
@@ -63,7 +63,7 @@ pub struct PilotReport {
     pub alpha: f64,
     pub seed: u64,
     /// The ranges as given, in setting order.
-    pub teachers: Vec<(&'static str, TeacherRange)>,
+    pub teachers: TeacherRanges,
     pub power: Vec<PowerRow>,
     pub pool: Vec<ConditionSummary>,
     pub pool_contrast: PoolContrast,
@@ -163,7 +163,7 @@ pub fn build(spec: &PilotSpec, runs: &[PilotRun], scores: &[Score]) -> PilotRepo
         studies: spec.studies,
         alpha: spec.alpha,
         seed: spec.seed,
-        teachers: spec.teachers.ranges().to_vec(),
+        teachers: spec.teachers.clone(),
         notes: notes(spec, &power),
         power,
         pool,
@@ -248,7 +248,7 @@ impl PilotReport {
             md += "Teachers: every simulated teacher as the conditions set it (by default perfect).\n\n";
         } else {
             md += "Teachers, drawn per participant:\n\n";
-            for (key, range) in &self.teachers {
+            for (key, range) in self.teachers.ranges() {
                 md += &format!("- `{key}`: {}\n", fmt_range(range));
             }
             md += "\n";

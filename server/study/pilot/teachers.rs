@@ -41,9 +41,20 @@ pub enum TeacherRange {
 }
 
 /// The ranges a pilot's teachers are drawn from: a setting not given keeps the condition's own
-/// value (by default, a perfect teacher).
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+/// value (by default, a perfect teacher). Written as it is read: an object of settings.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct TeacherRanges(Vec<(&'static str, TeacherRange)>);
+
+impl Serialize for TeacherRanges {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (key, range) in &self.0 {
+            map.serialize_entry(key, range)?;
+        }
+        map.end()
+    }
+}
 
 /// A teacher range that cannot be used; the text names the setting.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

@@ -263,5 +263,5 @@ fn the_report_holds_every_participant_and_a_power_row_per_size() {
         lines[1]
     );
     let json = serde_json::to_value(&report).unwrap();
-    assert_eq!(json["teachers"][0], json!(["teacher_error", [0.0, 0.2]]));
+    assert_eq!(json["teachers"], json!({"teacher_error": [0.0, 0.2]}));
 }
