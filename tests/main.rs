@@ -26,5 +26,6 @@ mod session_recording;
 mod slurm;
 mod store;
 mod studies;
+mod study_pilot;
 mod train_e2e;
 mod ws_sessions;

@@ -20,6 +20,7 @@ pub mod serve;
 #[cfg(test)]
 mod settings_reach;
 mod sim;
+mod study;
 mod train;
 
 use clap::{Parser, Subcommand};
@@ -58,6 +59,9 @@ pub enum Command {
     /// Time the learner: `bench sac` (updates per second against the FMA peak), `bench train`
     /// (environment steps per second of a whole run), `bench kernels`, `bench belief`.
     Bench(bench::BenchArgs),
+    /// Human-subject studies: `study pilot` estimates a study's power with simulated
+    /// participants before anyone is recruited.
+    Study(study::StudyArgs),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
@@ -72,5 +76,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Export(args) => export::run(args),
         Command::Bench(args) => bench::run(args, &compute),
         Command::Loadtest(args) => loadtest::run(args),
+        Command::Study(args) => study::run(args),
     }
 }

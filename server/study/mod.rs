@@ -6,9 +6,11 @@
 //! study compares and in which order each participant meets them ([`ordering`]); [`progress`]
 //! derives where a participant is from what is stored; [`results`] turns what participants did
 //! into Figure 4's numbers and the within-subject tests ([`crate::report::within_subject`]).
-//! The routes are `http::studies` and `http::participants`.
+//! [`pilot`] estimates a study's power before anyone is recruited, with simulated
+//! participants. The routes are `http::studies` and `http::participants`.
 
 pub mod ordering;
+pub mod pilot;
 pub mod progress;
 pub mod results;
 pub mod spec;
