@@ -15,6 +15,7 @@ pub(crate) mod overrides;
 mod prefs;
 mod progress;
 mod remote;
+mod report;
 mod reproduce;
 pub mod serve;
 #[cfg(test)]
@@ -62,6 +63,9 @@ pub enum Command {
     /// Human-subject studies: `study pilot` estimates a study's power with simulated
     /// participants before anyone is recruited.
     Study(study::StudyArgs),
+    /// Reports from a data dir: `report study` writes a study's results, tidy table (CSV,
+    /// Parquet) and figure (SVG, PNG).
+    Report(report::ReportArgs),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
@@ -77,5 +81,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Bench(args) => bench::run(args, &compute),
         Command::Loadtest(args) => loadtest::run(args),
         Command::Study(args) => study::run(args),
+        Command::Report(args) => report::run(args),
     }
 }

@@ -7,6 +7,7 @@
 mod fig3;
 mod fig5;
 pub mod robustness;
+pub mod study;
 
 use std::path::Path;
 
