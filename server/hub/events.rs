@@ -100,6 +100,7 @@ impl Owner {
                     abstract_state,
                     value,
                     data: Some(serde_json::to_string(&data).expect("query data serialises")),
+                    asked: None,
                 });
                 self.progress.answered += 1;
             }

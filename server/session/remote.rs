@@ -18,6 +18,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::events::AnswerValue;
+use crate::guidance::evaluative_run::AskedStep;
 use crate::remote_env::RemoteDescription;
 use crate::sim::{Env, EnvFault};
 
@@ -49,6 +50,8 @@ pub struct StoredMoment {
     pub action: Option<Vec<f32>>,
     /// The answer as first given (an undo is applied as a stored revision).
     pub value: Option<AnswerValue>,
+    /// The step as the run stored it (none: stored before steps were kept).
+    pub asked: Option<AskedStep>,
 }
 
 /// Which of the session's query numbers the run knows, and under which of its own: numbers
