@@ -17,6 +17,7 @@ use crate::rl::Sac;
 use crate::scene_graph::SceneGraph;
 use crate::sim::{Env, EnvOptions, Task};
 
+use super::catch_up::{CatchUp, GivenUp};
 use super::error::{ExpertError, SessionError};
 use super::events::{
     AnswerValue, Controls, Halt, Observer, QueryKind, Revision, SessionEvent, SessionSink,
@@ -68,13 +69,8 @@ pub(super) struct Asker {
     /// A person answered since the last call of [`Asker::take_answered`].
     answered_live: bool,
     /// A remote session resumed from a checkpoint: the queries stored after it, from `seq` on,
-    /// that the run may meet again (see `remote`); caught up while `seq < stored_end`.
-    catch_up: VecDeque<StoredMoment>,
-    /// Session query numbers stored before the resume: the catch-up ends here.
-    stored_end: u64,
-    /// Session query numbers the catch-up gave up on (the run did not meet their moments
-    /// again), as `[start, end)` ranges, for the session's `QueryNumbering`.
-    lost: Vec<(u64, u64)>,
+    /// that the run may meet again (see `remote`).
+    catch_up: CatchUp,
     pub(super) observer: Option<Box<dyn Observer>>,
 }
 
@@ -99,9 +95,7 @@ impl Asker {
             aborted: false,
             fault: None,
             answered_live: false,
-            catch_up: VecDeque::new(),
-            stored_end: 0,
-            lost: Vec::new(),
+            catch_up: CatchUp::default(),
             observer,
         }
     }
@@ -119,8 +113,7 @@ impl Asker {
         stored: Vec<StoredMoment>,
     ) {
         self.seq = next;
-        self.stored_end = stored_end.max(next);
-        self.catch_up = stored.into_iter().filter(|m| m.seq >= next).collect();
+        self.catch_up = CatchUp::new(next, stored_end, stored);
         self.replay.clear();
         self.replay_revisions = std::mem::take(&mut self.replay_revisions)
             .into_iter()
@@ -134,7 +127,7 @@ impl Asker {
 
     /// Whether the run is still catching up on queries stored after its checkpoint.
     pub(super) fn catching_up(&self) -> bool {
-        self.seq < self.stored_end
+        self.catch_up.active(self.seq)
     }
 
     /// The stored answer to the moment `(step, action)` the run asks about, if it is the next
@@ -142,40 +135,21 @@ impl Asker {
     /// [`Asker::replayed`]). A stored query that was left unanswered is asked again under its
     /// own number. Any other moment ends the catch-up.
     fn caught_up(&mut self, step: u64, action: &[f32]) -> Option<AnswerValue> {
-        if !self.catching_up() {
-            return None;
-        }
-        let met = self.catch_up.front().is_some_and(|m| {
-            m.seq == self.seq && m.step == step && m.action.as_deref() == Some(action)
-        });
-        if !met {
-            self.give_up_catch_up();
-            return None;
-        }
-        self.catch_up.pop_front().and_then(|m| m.value)
+        self.catch_up
+            .meet(&mut self.seq, step, action)
+            .and_then(|m| m.value)
     }
 
     /// End the catch-up once the run is past the next stored query's step (`steps` steps done)
     /// without having met it.
     pub(super) fn settle_catch_up(&mut self, steps: u64) {
-        if self.catching_up() && self.catch_up.front().is_none_or(|m| m.step < steps) {
-            self.give_up_catch_up();
-        }
+        self.catch_up.settle(&mut self.seq, steps);
     }
 
-    /// The run did not meet the stored queries from `seq` on again: they stay stored but the
-    /// run lost them, and new queries are numbered after every stored one.
-    fn give_up_catch_up(&mut self) {
-        if self.catching_up() {
-            self.lost.push((self.seq, self.stored_end));
-            self.seq = self.stored_end;
-        }
-        self.catch_up.clear();
-    }
-
-    /// The ranges of query numbers the catch-up gave up on since the last call.
-    pub(super) fn take_lost(&mut self) -> Vec<(u64, u64)> {
-        std::mem::take(&mut self.lost)
+    /// The stored queries the catch-up gave up on since the last call (the run did not meet
+    /// their moments again).
+    pub(super) fn take_given_up(&mut self) -> Vec<GivenUp> {
+        self.catch_up.take_given_up()
     }
 
     /// A stored answer is the next query's (replayed or caught up on): nobody is asked.

@@ -388,7 +388,9 @@ impl Checkpoints {
             }
             Checkpoints::RemoteResumable { rule, numbering } => {
                 trainer.asker.settle_catch_up(run.steps());
-                numbering.lost.extend(trainer.asker.take_lost());
+                for given_up in trainer.asker.take_given_up() {
+                    numbering.lost.push((given_up.start, given_up.end));
+                }
                 if trainer.asker.take_answered() {
                     rule.answered();
                 }

@@ -14,9 +14,11 @@
 //! - `pacing`: what both loops keep besides the algorithm: the pace people watch a session
 //!   at, and how often it reports its progress.
 //! - `remote`: a session on an env in another process, which resumes from its latest
-//!   checkpoint instead of replaying from step 0.
+//!   checkpoint instead of replaying from step 0; `catch_up`: such a resumed session meeting
+//!   the moments stored after that checkpoint again, or giving them up.
 
 mod asker;
+mod catch_up;
 pub mod combine;
 mod error;
 mod evaluative_loop;
