@@ -10,6 +10,7 @@ use crate::guidance::drpl::pool::Clip;
 use crate::guidance::drpl::simulated_teacher::SimulatedTeacher;
 use crate::guidance::drpl::trainer::{Preference, PreferenceQuery, PreferenceTrainer};
 use crate::guidance::drpl::trajectories::Trajectory;
+use crate::guidance::evaluative_run::AskedStep;
 use crate::guidance::evaluative_trainer::{
     Evaluation, EvaluativeQuery, EvaluativeTrainer, RestoreError,
 };
@@ -23,7 +24,7 @@ use super::events::{
     AnswerValue, Controls, Halt, Observer, QueryKind, Revision, SessionEvent, SessionSink,
     StoredRevision,
 };
-use super::query::{self, FrameHistory, QueryContent, QueryData, SegmentData};
+use super::query::{self, FrameHistory, QueryContent, QueryData, QueryRecord, SegmentData};
 use super::remote::{Reconnect, StoredMoment};
 use super::runner::SessionContext;
 
@@ -71,6 +72,9 @@ pub(super) struct Asker {
     /// A remote session resumed from a checkpoint: the queries stored after it, from `seq` on,
     /// that the run may meet again (see `remote`).
     catch_up: CatchUp,
+    /// A remote session: each evaluative query reports its step as the run stores it, so that
+    /// a run resumed from an earlier checkpoint can take the answered ones back in.
+    pub(super) keep_steps: bool,
     pub(super) observer: Option<Box<dyn Observer>>,
 }
 
@@ -96,6 +100,7 @@ impl Asker {
             fault: None,
             answered_live: false,
             catch_up: CatchUp::default(),
+            keep_steps: false,
             observer,
         }
     }
@@ -225,7 +230,7 @@ impl Asker {
         abstract_state: u32,
         kind: QueryKind,
         describe: String,
-        content: impl FnOnce() -> Result<(QueryContent, QueryData), SessionError>,
+        content: impl FnOnce() -> Result<(QueryContent, QueryRecord), SessionError>,
     ) -> Option<AnswerValue> {
         if let Some(v) = self.replay.pop_front() {
             return Some(self.replayed(step, kind, describe, v));
@@ -234,7 +239,7 @@ impl Asker {
             self.aborted = true;
             return None;
         }
-        let (content, data) = match content() {
+        let (content, record) = match content() {
             Ok(c) => c,
             Err(reason) => {
                 self.fault = Some(reason);
@@ -250,7 +255,7 @@ impl Asker {
             step,
             abstract_state,
             content: Box::new(content),
-            data: Box::new(data),
+            record: Box::new(record),
         });
         match self.controls.wait_answer(seq) {
             Ok(v) => {
@@ -272,7 +277,7 @@ impl Asker {
         kind: QueryKind,
         describe: String,
         value: AnswerValue,
-        data: QueryData,
+        record: QueryRecord,
     ) {
         self.replay.pop_front();
         let seq = self.seq;
@@ -284,7 +289,7 @@ impl Asker {
             abstract_state,
             kind,
             value,
-            data: Box::new(data),
+            record: Box::new(record),
         });
         self.seq += 1;
     }
@@ -347,6 +352,11 @@ impl EvaluativeTrainer for EvaluativeAsker {
                 .as_evaluation()
                 .unwrap_or(Evaluation::NoFeedback);
         }
+        let keep_steps = self.asker.keep_steps;
+        let record = || QueryRecord {
+            data: transition(q),
+            asked: keep_steps.then(|| AskedStep::of(q)),
+        };
         match &mut self.judge {
             Judge::Human { history, graph } => self
                 .asker
@@ -362,7 +372,7 @@ impl EvaluativeTrainer for EvaluativeAsker {
                             holding: graph.holding(q.abstract_state),
                             predicted: q.predicted,
                         };
-                        Ok((content, transition(q)))
+                        Ok((content, record()))
                     },
                 )
                 .and_then(AnswerValue::as_evaluation)
@@ -381,7 +391,7 @@ impl EvaluativeTrainer for EvaluativeAsker {
                     QueryKind::Evaluative,
                     describe,
                     AnswerValue::evaluation(e),
-                    transition(q),
+                    record(),
                 );
                 e
             }
@@ -508,10 +518,13 @@ fn transition(q: &EvaluativeQuery<'_>) -> QueryData {
 }
 
 /// A preference query's two segments, for datasets.
-fn segments(q: &PreferenceQuery<'_>) -> QueryData {
-    QueryData::Preference {
-        left: SegmentData::of(q.left),
-        right: SegmentData::of(q.right),
+fn segments(q: &PreferenceQuery<'_>) -> QueryRecord {
+    QueryRecord {
+        data: QueryData::Preference {
+            left: SegmentData::of(q.left),
+            right: SegmentData::of(q.right),
+        },
+        asked: None,
     }
 }
 

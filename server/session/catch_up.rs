@@ -1,7 +1,8 @@
 //! A remote session resumed from a run checkpoint catches up on the evaluative queries stored
 //! after it (module `remote`): while the run meets their moments again (an env that repeats its
 //! episodes), each takes its stored answer under its own number; the first moment that differs
-//! (a robot) ends the catch-up, and the stored queries not met again are given up on.
+//! (a robot) ends the catch-up, and the stored queries not met again are given up on, to be
+//! taken into the run from their stored steps where they were answered.
 
 use std::collections::VecDeque;
 

@@ -15,7 +15,8 @@
 //!   at, and how often it reports its progress.
 //! - `remote`: a session on an env in another process, which resumes from its latest
 //!   checkpoint instead of replaying from step 0; `catch_up`: such a resumed session meeting
-//!   the moments stored after that checkpoint again, or giving them up.
+//!   the moments stored after that checkpoint again, or giving them up (their answered steps
+//!   are then taken into the run).
 
 mod asker;
 mod catch_up;
@@ -38,7 +39,7 @@ pub use events::{
     Revision, SessionEvent, SessionSink, StoredRevision,
 };
 pub use plan::{PlanError, SessionPlan};
-pub use query::{Clip, QueryContent, QueryData, SegmentData};
+pub use query::{Clip, QueryContent, QueryData, QueryRecord, SegmentData};
 pub use remote::{QueryNumbering, Reconnect, RemoteSession, StoredMoment};
 pub use runner::{SessionContext, digest, run_session};
 pub use spec::{SessionMethod, SessionSettings, SessionSpec, TrainerKind, UnknownMethod};
