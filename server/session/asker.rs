@@ -1,22 +1,19 @@
 //! Who answers a session's queries: stored answers first (after a resume), then people through
 //! the control channel, or a synthetic trainer whose answers are reported to be stored; and the
-//! session's observer (the recording) sees every query and answer.
+//! session's observer (the recording) sees every query and answer. Evaluative queries are
+//! judged here; preference pairs are compared in `preference_asker`.
 
 use std::collections::VecDeque;
 use std::path::Path;
 use std::sync::Arc;
 
-use crate::guidance::drpl::pool::Clip;
-use crate::guidance::drpl::simulated_teacher::SimulatedTeacher;
-use crate::guidance::drpl::trainer::{Preference, PreferenceQuery, PreferenceTrainer};
-use crate::guidance::drpl::trajectories::Trajectory;
 use crate::guidance::evaluative_run::AskedStep;
 use crate::guidance::evaluative_trainer::{
     Evaluation, EvaluativeQuery, EvaluativeTrainer, RestoreError,
 };
 use crate::rl::Sac;
 use crate::scene_graph::SceneGraph;
-use crate::sim::{Env, EnvOptions, Task};
+use crate::sim::Task;
 
 use super::catch_up::{CatchUp, GivenUp};
 use super::error::{ExpertError, SessionError};
@@ -24,8 +21,8 @@ use super::events::{
     AnswerValue, Controls, Halt, Observer, QueryKind, Revision, SessionEvent, SessionSink,
     StoredRevision,
 };
-use super::query::{self, FrameHistory, QueryContent, QueryData, QueryRecord, SegmentData};
-use super::remote::{Reconnect, StoredMoment};
+use super::query::{FrameHistory, QueryContent, QueryData, QueryRecord};
+use super::remote::StoredMoment;
 use super::runner::SessionContext;
 
 /// Load an expert written by `dualrep expert` (the synthetic evaluative trainer consults it).
@@ -224,7 +221,7 @@ impl Asker {
     }
 
     /// A person's answer to the next query (`None` if the session halted while waiting).
-    fn ask(
+    pub(super) fn ask(
         &mut self,
         step: u64,
         abstract_state: u32,
@@ -270,7 +267,7 @@ impl Asker {
     }
 
     /// A synthetic trainer answered the next query.
-    fn report(
+    pub(super) fn report(
         &mut self,
         step: u64,
         abstract_state: u32,
@@ -399,114 +396,6 @@ impl EvaluativeTrainer for EvaluativeAsker {
     }
 }
 
-/// Where a human preference session replays its clips: a new env of our task, or a
-/// connection of its own to the remote env the trajectories were recorded on.
-pub(super) enum ClipEnv {
-    Builtin {
-        task: Task,
-        /// The task's version, to replay the clips in the env they were recorded in.
-        options: EnvOptions,
-    },
-    Remote {
-        reconnect: Reconnect,
-        /// Opened at the first query.
-        env: Option<Box<dyn Env>>,
-    },
-}
-
-impl ClipEnv {
-    fn render(
-        &mut self,
-        trajectory: &Trajectory,
-        clip: &Clip,
-    ) -> Result<query::Clip, SessionError> {
-        match self {
-            ClipEnv::Builtin { task, options } => {
-                Ok(query::render_clip(*task, options, trajectory, clip))
-            }
-            ClipEnv::Remote { reconnect, env } => {
-                if env.is_none() {
-                    *env = Some(reconnect()?);
-                }
-                let on = env.as_deref_mut().expect("connected above");
-                query::render_clip_on(on, trajectory, clip).map_err(|e| {
-                    // A broken connection is not used again.
-                    *env = None;
-                    SessionError::ClipReplay(e)
-                })
-            }
-        }
-    }
-}
-
-/// Who compares a preference session's pairs.
-pub(super) enum Comparer {
-    Human {
-        clips: ClipEnv,
-        graph: SceneGraph,
-        trajectories: Vec<Trajectory>,
-    },
-    Synthetic {
-        /// Boxed: a myopic teacher carries a copy of the pool's features.
-        oracle: Box<SimulatedTeacher>,
-        graph: SceneGraph,
-    },
-}
-
-pub(super) struct PreferenceAsker {
-    pub(super) asker: Asker,
-    pub(super) comparer: Comparer,
-}
-
-impl PreferenceTrainer for PreferenceAsker {
-    fn compare(&mut self, q: &PreferenceQuery<'_>) -> Preference {
-        let state = q.left.abstract_state.map_or(0, |s| s.0);
-        match &mut self.comparer {
-            Comparer::Human {
-                clips,
-                graph,
-                trajectories,
-            } => self
-                .asker
-                .ask(
-                    q.query as u64,
-                    state,
-                    QueryKind::Preference,
-                    describe_preference(graph, q),
-                    || {
-                        let content = QueryContent::Preference {
-                            left: clips.render(&trajectories[q.left.trajectory], q.left)?,
-                            right: clips.render(&trajectories[q.right.trajectory], q.right)?,
-                            left_holding: query::holding(graph, q.left.abstract_state),
-                            right_holding: query::holding(graph, q.right.abstract_state),
-                            predicate: q.predicate.map(|i| graph.predicates()[i]),
-                        };
-                        Ok((content, segments(q)))
-                    },
-                )
-                .and_then(AnswerValue::as_preference)
-                .unwrap_or(Preference::Skip),
-            Comparer::Synthetic { oracle, graph } => {
-                let p = oracle.compare(q);
-                let describe = if self.asker.observer.is_some() {
-                    describe_preference(graph, q)
-                } else {
-                    String::new()
-                };
-                self.asker.report(
-                    q.query as u64,
-                    state,
-                    QueryKind::Preference,
-                    describe,
-                    AnswerValue::Preference(p),
-                    segments(q),
-                );
-                p
-            }
-        }
-    }
-}
-
 /// An evaluative query's transition, for datasets.
 fn transition(q: &EvaluativeQuery<'_>) -> QueryData {
     QueryData::Evaluative {
@@ -514,17 +403,6 @@ fn transition(q: &EvaluativeQuery<'_>) -> QueryData {
         action: q.action.to_vec(),
         reward: q.reward,
         next_observation: q.next_obs.to_vec(),
-    }
-}
-
-/// A preference query's two segments, for datasets.
-fn segments(q: &PreferenceQuery<'_>) -> QueryRecord {
-    QueryRecord {
-        data: QueryData::Preference {
-            left: SegmentData::of(q.left),
-            right: SegmentData::of(q.right),
-        },
-        asked: None,
     }
 }
 
@@ -536,22 +414,5 @@ fn describe_evaluative(graph: &SceneGraph, q: &EvaluativeQuery<'_>) -> String {
         q.step,
         action.join(", "),
         graph.holding(q.abstract_state).join(", ")
-    )
-}
-
-fn describe_preference(graph: &SceneGraph, q: &PreferenceQuery<'_>) -> String {
-    let differ = q
-        .predicate
-        .map(|i| format!(" (they differ in \"{}\")", graph.predicates()[i].label))
-        .unwrap_or_default();
-    format!(
-        "query {}: trajectory {} steps {}..{} or trajectory {} steps {}..{}?{differ}",
-        q.query,
-        q.left.trajectory,
-        q.left.start,
-        q.left.end,
-        q.right.trajectory,
-        q.right.start,
-        q.right.end
     )
 }

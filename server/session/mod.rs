@@ -8,7 +8,8 @@
 //! - `combine`: how several trainers' answers to one query become the one the learner takes.
 //! - `query`: what a person is shown (clips, predicates).
 //! - `asker`: who answers: stored answers, people through the control channel, or a synthetic
-//!   trainer; the observer sees every query and answer.
+//!   trainer; the observer sees every query and answer. `preference_asker`: who compares a
+//!   preference session's pairs, through it.
 //! - `runner`: runs the plan; `evaluative_loop` and `preference_loop` drive it:
 //!   pacing, frames, asking, replaying stored answers, checkpoints.
 //! - `pacing`: what both loops keep besides the algorithm: the pace people watch a session
@@ -26,6 +27,7 @@ mod evaluative_loop;
 pub mod events;
 mod pacing;
 pub mod plan;
+mod preference_asker;
 mod preference_loop;
 pub mod query;
 pub mod remote;
