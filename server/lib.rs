@@ -28,8 +28,8 @@
 //!   graph, query kind) is validated once, at launch or resume, and shared by the hub, the
 //!   thread and the trainer's `hello`; pacing, queries to people, replay of stored answers on
 //!   resume (on a remote env, which cannot replay, its latest whole-run checkpoint instead, then
-//!   the stored answers to the moments it meets again), checkpoints. No async runtime, no
-//!   database.
+//!   the stored answers to the moments it meets again and the stored answered steps it does
+//!   not), checkpoints. No async runtime, no database.
 //! - [`study`]: human-subject studies (the paper's Figures 4 and 6): which conditions a
 //!   within-subject study compares and the counterbalanced order (Williams, random, fixed) in
 //!   which each participant meets them; their analysis is [`report::within_subject`].

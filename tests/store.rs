@@ -1,7 +1,8 @@
 //! The store against a real SQLite database per test (`#[sqlx::test]` applies `migrations/`).
 
 use dualrep::guidance::drpl::trainer::Preference;
-use dualrep::guidance::evaluative_run::EpisodeRecord;
+use dualrep::guidance::evaluative_run::{AskedStep, EpisodeRecord};
+use dualrep::scene_graph::AbstractState;
 use dualrep::session::{AnswerValue, Answerer, QueryKind, StoredMoment};
 use dualrep::sim::Outcome;
 use dualrep::store::{CommitOutcome, NewSession, Status, Store, SyntheticAnswer};
@@ -104,12 +105,14 @@ async fn stored_moments_carry_each_querys_step_action_and_answer(pool: SqlitePoo
                 step: 7,
                 action: Some(vec![0.25, -0.830583]),
                 value: Some(AnswerValue::Evaluation(-1)),
+                asked: None,
             },
             StoredMoment {
                 seq: 1,
                 step: 8,
                 action: None,
                 value: None,
+                asked: None,
             },
         ]
     );
@@ -173,6 +176,7 @@ async fn synthetic_batches_store_queries_with_answers_once(pool: SqlitePool) {
             abstract_state: 1,
             value: AnswerValue::Evaluation(if i % 2 == 0 { 1 } else { -1 }),
             data: None,
+            asked: None,
         })
         .collect();
     store.insert_synthetic("s1", &batch).await.unwrap();
@@ -341,5 +345,126 @@ async fn an_undo_reopens_an_answer_and_the_resume_replays_it_where_it_was_applie
     assert_eq!(
         store.replay_revisions("s1").await.unwrap()[0].applied_at,
         Some(4)
+    );
+}
+
+/// A step whose numbers JSON would not give back bit for bit without care.
+fn asked_step(mark: f32) -> AskedStep {
+    AskedStep {
+        obs: vec![0.1 + mark, f32::MIN_POSITIVE, -1.0 / 3.0],
+        action: vec![mark.sin(), -0.830583],
+        reward: 0.7 * mark,
+        next_obs: vec![0.2 + mark, 1e-30, 2.0 / 3.0],
+        terminated: mark > 1.0,
+        abstract_state: AbstractState(5),
+        predicted: -0.123_456_79,
+    }
+}
+
+#[sqlx::test]
+async fn asked_steps_come_back_bit_for_bit_with_their_moments(pool: SqlitePool) {
+    let store = store_with_session(pool, "s1").await;
+    let data = r#"{"kind": "evaluative", "observation": [0.0], "action": [0.0, 0.0],
+                   "reward": 0.0, "next_observation": [0.0]}"#;
+    let q = store
+        .upsert_query("s1", 0, QueryKind::Evaluative, 7, 5, "{}", Some(data))
+        .await
+        .unwrap();
+    store
+        .store_asked_step(q, "s1", &asked_step(0.5))
+        .await
+        .unwrap();
+    // Asked again under its number (a resumed run met the moment again): the first one stays.
+    store
+        .store_asked_step(q, "s1", &asked_step(2.0))
+        .await
+        .unwrap();
+    store
+        .commit_answer(
+            q,
+            "s1",
+            AnswerValue::Evaluation(1),
+            Answerer::Trainer,
+            None,
+            5,
+        )
+        .await
+        .unwrap();
+    let open = store
+        .upsert_query("s1", 1, QueryKind::Evaluative, 8, 5, "{}", None)
+        .await
+        .unwrap();
+    store
+        .store_asked_step(open, "s1", &asked_step(3.0))
+        .await
+        .unwrap();
+
+    let moments = store.stored_moments("s1").await.unwrap();
+    assert_eq!(moments.len(), 2);
+    let (first, second) = (&moments[0], &moments[1]);
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let expected = asked_step(0.5);
+    let got = first.asked.as_ref().expect("the step was kept");
+    assert_eq!(got, &expected);
+    assert_eq!(bits(&got.obs), bits(&expected.obs));
+    assert_eq!(got.reward.to_bits(), expected.reward.to_bits());
+    assert_eq!(got.predicted.to_bits(), expected.predicted.to_bits());
+    // The catch-up compares the exact action, not the one in `queries.data`.
+    assert_eq!(first.action.as_deref(), Some(expected.action.as_slice()));
+    assert_eq!(first.value, Some(AnswerValue::Evaluation(1)));
+    // A query left open keeps its step too (it has no answer to take in).
+    assert_eq!(second.asked, Some(asked_step(3.0)));
+    assert_eq!(second.value, None);
+    assert!(second.asked.as_ref().unwrap().terminated);
+}
+
+#[sqlx::test]
+async fn synthetic_answers_store_their_steps_once(pool: SqlitePool) {
+    let store = store_with_session(pool, "s1").await;
+    let batch: Vec<SyntheticAnswer> = (0..3u64)
+        .map(|i| SyntheticAnswer {
+            seq: i,
+            kind: QueryKind::Evaluative,
+            step: 20 + i,
+            abstract_state: 5,
+            value: AnswerValue::Evaluation(-1),
+            data: None,
+            asked: (i != 1).then(|| asked_step(i as f32)),
+        })
+        .collect();
+    store.insert_synthetic("s1", &batch).await.unwrap();
+    store.insert_synthetic("s1", &batch).await.unwrap();
+    let moments = store.stored_moments("s1").await.unwrap();
+    let asked: Vec<Option<AskedStep>> = moments.into_iter().map(|m| m.asked).collect();
+    assert_eq!(
+        asked,
+        vec![Some(asked_step(0.0)), None, Some(asked_step(2.0))]
+    );
+    let rows: i64 = sqlx::query_scalar("SELECT COUNT(*) FROM query_transitions")
+        .fetch_one(store.pool())
+        .await
+        .unwrap();
+    assert_eq!(rows, 2);
+}
+
+#[sqlx::test]
+async fn a_stored_step_that_is_not_whole_f32s_is_an_error_that_names_its_column(pool: SqlitePool) {
+    let store = store_with_session(pool, "s1").await;
+    let q = store
+        .upsert_query("s1", 0, QueryKind::Evaluative, 7, 5, "{}", None)
+        .await
+        .unwrap();
+    store
+        .store_asked_step(q, "s1", &asked_step(0.5))
+        .await
+        .unwrap();
+    sqlx::query("UPDATE query_transitions SET next_observation = x'00010203ff'")
+        .execute(store.pool())
+        .await
+        .unwrap();
+    let err = store.stored_moments("s1").await.unwrap_err().to_string();
+    assert!(
+        err.contains("query_transitions.next_observation: 5 bytes"),
+        "{err}"
     );
 }

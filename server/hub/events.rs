@@ -1,6 +1,6 @@
-//! A session thread's events, applied by its owner: queries, synthetic answers, episodes and
-//! checkpoints go to the store; frames and progress to the browsers; each query's deadline
-//! starts.
+//! A session thread's events, applied by its owner: queries (with a remote session's steps as
+//! its run stored them), synthetic answers, episodes and checkpoints go to the store; frames
+//! and progress to the browsers; each query's deadline starts.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -8,7 +8,7 @@ use std::time::Duration;
 use super::episode_frames::write_json;
 use super::owner::{Open, Owner};
 use crate::protocol::{QueryMessage, ServerMessage};
-use crate::session::{SessionEvent, TrainerKind};
+use crate::session::{QueryRecord, SessionEvent, TrainerKind};
 use crate::store::{AlignmentRow, Status, SyntheticAnswer};
 
 /// Synthetic answers stored per transaction at most.
@@ -49,10 +49,10 @@ impl Owner {
                 step,
                 abstract_state,
                 content,
-                data,
+                record,
             } => {
                 let payload = serde_json::to_string(&content).expect("query content serialises");
-                let data = serde_json::to_string(&data).expect("query data serialises");
+                let data = serde_json::to_string(&record.data).expect("query data serialises");
                 let row = self
                     .store
                     .upsert_query(
@@ -65,6 +65,10 @@ impl Owner {
                         Some(&data),
                     )
                     .await?;
+                // Before the query reaches anyone: every answer it gets has its step stored.
+                if let Some(asked) = &record.asked {
+                    self.store.store_asked_step(row, &self.id, asked).await?;
+                }
                 let timeout = self.answer_timeout;
                 let text: Arc<str> = ServerMessage::Query(Box::new(QueryMessage {
                     id: seq,
@@ -91,8 +95,9 @@ impl Owner {
                 abstract_state,
                 kind,
                 value,
-                data,
+                record,
             } => {
+                let QueryRecord { data, asked } = *record;
                 self.batch.push(SyntheticAnswer {
                     seq,
                     kind,
@@ -100,6 +105,7 @@ impl Owner {
                     abstract_state,
                     value,
                     data: Some(serde_json::to_string(&data).expect("query data serialises")),
+                    asked,
                 });
                 self.progress.answered += 1;
             }

@@ -30,7 +30,8 @@ pub struct RemotePlan {
     /// `<data dir>/checkpoints/<id>.resume`.
     pub resume_path: PathBuf,
     pub stored_queries: u64,
-    /// The stored evaluative queries a resumed run catches up on.
+    /// The stored evaluative queries (with the steps they asked about) a resumed run catches
+    /// up on, or takes in where it does not meet them again.
     pub stored_moments: Vec<StoredMoment>,
 }
 

@@ -14,7 +14,8 @@ use super::owner::Owner;
 use super::{Hub, HubConfig, UNDO_WINDOW};
 use crate::protocol::ErrorCode;
 use crate::session::{
-    AnswerValue, Answerer, Control, QueryContent, QueryData, SessionEvent, SessionPlan, SessionSpec,
+    AnswerValue, Answerer, Control, QueryContent, QueryData, QueryRecord, SessionEvent,
+    SessionPlan, SessionSpec,
 };
 use crate::store::{AddTrainer, NewSession, Status, Store, TrainerOrigin};
 
@@ -132,11 +133,14 @@ impl Harness {
                 step: seq * 10,
                 abstract_state: 1,
                 content: Box::new(content()),
-                data: Box::new(QueryData::Evaluative {
-                    observation: vec![0.0; 3],
-                    action: vec![0.5; 3],
-                    reward: 0.0,
-                    next_observation: vec![0.1; 3],
+                record: Box::new(QueryRecord {
+                    data: QueryData::Evaluative {
+                        observation: vec![0.0; 3],
+                        action: vec![0.5; 3],
+                        reward: 0.0,
+                        next_observation: vec![0.1; 3],
+                    },
+                    asked: None,
                 }),
             })
             .unwrap();

@@ -1,29 +1,28 @@
 //! Who answers a session's queries: stored answers first (after a resume), then people through
 //! the control channel, or a synthetic trainer whose answers are reported to be stored; and the
-//! session's observer (the recording) sees every query and answer.
+//! session's observer (the recording) sees every query and answer. Evaluative queries are
+//! judged here; preference pairs are compared in `preference_asker`.
 
 use std::collections::VecDeque;
 use std::path::Path;
 use std::sync::Arc;
 
-use crate::guidance::drpl::pool::Clip;
-use crate::guidance::drpl::simulated_teacher::SimulatedTeacher;
-use crate::guidance::drpl::trainer::{Preference, PreferenceQuery, PreferenceTrainer};
-use crate::guidance::drpl::trajectories::Trajectory;
+use crate::guidance::evaluative_run::AskedStep;
 use crate::guidance::evaluative_trainer::{
     Evaluation, EvaluativeQuery, EvaluativeTrainer, RestoreError,
 };
 use crate::rl::Sac;
 use crate::scene_graph::SceneGraph;
-use crate::sim::{Env, EnvOptions, Task};
+use crate::sim::Task;
 
+use super::catch_up::{CatchUp, GivenUp};
 use super::error::{ExpertError, SessionError};
 use super::events::{
     AnswerValue, Controls, Halt, Observer, QueryKind, Revision, SessionEvent, SessionSink,
     StoredRevision,
 };
-use super::query::{self, FrameHistory, QueryContent, QueryData, SegmentData};
-use super::remote::{Reconnect, StoredMoment};
+use super::query::{FrameHistory, QueryContent, QueryData, QueryRecord};
+use super::remote::StoredMoment;
 use super::runner::SessionContext;
 
 /// Load an expert written by `dualrep expert` (the synthetic evaluative trainer consults it).
@@ -68,13 +67,11 @@ pub(super) struct Asker {
     /// A person answered since the last call of [`Asker::take_answered`].
     answered_live: bool,
     /// A remote session resumed from a checkpoint: the queries stored after it, from `seq` on,
-    /// that the run may meet again (see `remote`); caught up while `seq < stored_end`.
-    catch_up: VecDeque<StoredMoment>,
-    /// Session query numbers stored before the resume: the catch-up ends here.
-    stored_end: u64,
-    /// Session query numbers the catch-up gave up on (the run did not meet their moments
-    /// again), as `[start, end)` ranges, for the session's `QueryNumbering`.
-    lost: Vec<(u64, u64)>,
+    /// that the run may meet again (see `remote`).
+    catch_up: CatchUp,
+    /// A remote session: each evaluative query reports its step as the run stores it, so that
+    /// a run resumed from an earlier checkpoint can take the answered ones back in.
+    pub(super) keep_steps: bool,
     pub(super) observer: Option<Box<dyn Observer>>,
 }
 
@@ -99,9 +96,8 @@ impl Asker {
             aborted: false,
             fault: None,
             answered_live: false,
-            catch_up: VecDeque::new(),
-            stored_end: 0,
-            lost: Vec::new(),
+            catch_up: CatchUp::default(),
+            keep_steps: false,
             observer,
         }
     }
@@ -119,8 +115,7 @@ impl Asker {
         stored: Vec<StoredMoment>,
     ) {
         self.seq = next;
-        self.stored_end = stored_end.max(next);
-        self.catch_up = stored.into_iter().filter(|m| m.seq >= next).collect();
+        self.catch_up = CatchUp::new(next, stored_end, stored);
         self.replay.clear();
         self.replay_revisions = std::mem::take(&mut self.replay_revisions)
             .into_iter()
@@ -134,7 +129,7 @@ impl Asker {
 
     /// Whether the run is still catching up on queries stored after its checkpoint.
     pub(super) fn catching_up(&self) -> bool {
-        self.seq < self.stored_end
+        self.catch_up.active(self.seq)
     }
 
     /// The stored answer to the moment `(step, action)` the run asks about, if it is the next
@@ -142,40 +137,21 @@ impl Asker {
     /// [`Asker::replayed`]). A stored query that was left unanswered is asked again under its
     /// own number. Any other moment ends the catch-up.
     fn caught_up(&mut self, step: u64, action: &[f32]) -> Option<AnswerValue> {
-        if !self.catching_up() {
-            return None;
-        }
-        let met = self.catch_up.front().is_some_and(|m| {
-            m.seq == self.seq && m.step == step && m.action.as_deref() == Some(action)
-        });
-        if !met {
-            self.give_up_catch_up();
-            return None;
-        }
-        self.catch_up.pop_front().and_then(|m| m.value)
+        self.catch_up
+            .meet(&mut self.seq, step, action)
+            .and_then(|m| m.value)
     }
 
     /// End the catch-up once the run is past the next stored query's step (`steps` steps done)
     /// without having met it.
     pub(super) fn settle_catch_up(&mut self, steps: u64) {
-        if self.catching_up() && self.catch_up.front().is_none_or(|m| m.step < steps) {
-            self.give_up_catch_up();
-        }
+        self.catch_up.settle(&mut self.seq, steps);
     }
 
-    /// The run did not meet the stored queries from `seq` on again: they stay stored but the
-    /// run lost them, and new queries are numbered after every stored one.
-    fn give_up_catch_up(&mut self) {
-        if self.catching_up() {
-            self.lost.push((self.seq, self.stored_end));
-            self.seq = self.stored_end;
-        }
-        self.catch_up.clear();
-    }
-
-    /// The ranges of query numbers the catch-up gave up on since the last call.
-    pub(super) fn take_lost(&mut self) -> Vec<(u64, u64)> {
-        std::mem::take(&mut self.lost)
+    /// The stored queries the catch-up gave up on since the last call (the run did not meet
+    /// their moments again).
+    pub(super) fn take_given_up(&mut self) -> Vec<GivenUp> {
+        self.catch_up.take_given_up()
     }
 
     /// A stored answer is the next query's (replayed or caught up on): nobody is asked.
@@ -245,13 +221,13 @@ impl Asker {
     }
 
     /// A person's answer to the next query (`None` if the session halted while waiting).
-    fn ask(
+    pub(super) fn ask(
         &mut self,
         step: u64,
         abstract_state: u32,
         kind: QueryKind,
         describe: String,
-        content: impl FnOnce() -> Result<(QueryContent, QueryData), SessionError>,
+        content: impl FnOnce() -> Result<(QueryContent, QueryRecord), SessionError>,
     ) -> Option<AnswerValue> {
         if let Some(v) = self.replay.pop_front() {
             return Some(self.replayed(step, kind, describe, v));
@@ -260,7 +236,7 @@ impl Asker {
             self.aborted = true;
             return None;
         }
-        let (content, data) = match content() {
+        let (content, record) = match content() {
             Ok(c) => c,
             Err(reason) => {
                 self.fault = Some(reason);
@@ -276,7 +252,7 @@ impl Asker {
             step,
             abstract_state,
             content: Box::new(content),
-            data: Box::new(data),
+            record: Box::new(record),
         });
         match self.controls.wait_answer(seq) {
             Ok(v) => {
@@ -291,14 +267,14 @@ impl Asker {
     }
 
     /// A synthetic trainer answered the next query.
-    fn report(
+    pub(super) fn report(
         &mut self,
         step: u64,
         abstract_state: u32,
         kind: QueryKind,
         describe: String,
         value: AnswerValue,
-        data: QueryData,
+        record: QueryRecord,
     ) {
         self.replay.pop_front();
         let seq = self.seq;
@@ -310,7 +286,7 @@ impl Asker {
             abstract_state,
             kind,
             value,
-            data: Box::new(data),
+            record: Box::new(record),
         });
         self.seq += 1;
     }
@@ -373,6 +349,11 @@ impl EvaluativeTrainer for EvaluativeAsker {
                 .as_evaluation()
                 .unwrap_or(Evaluation::NoFeedback);
         }
+        let keep_steps = self.asker.keep_steps;
+        let record = || QueryRecord {
+            data: transition(q),
+            asked: keep_steps.then(|| AskedStep::of(q)),
+        };
         match &mut self.judge {
             Judge::Human { history, graph } => self
                 .asker
@@ -388,7 +369,7 @@ impl EvaluativeTrainer for EvaluativeAsker {
                             holding: graph.holding(q.abstract_state),
                             predicted: q.predicted,
                         };
-                        Ok((content, transition(q)))
+                        Ok((content, record()))
                     },
                 )
                 .and_then(AnswerValue::as_evaluation)
@@ -407,117 +388,9 @@ impl EvaluativeTrainer for EvaluativeAsker {
                     QueryKind::Evaluative,
                     describe,
                     AnswerValue::evaluation(e),
-                    transition(q),
+                    record(),
                 );
                 e
-            }
-        }
-    }
-}
-
-/// Where a human preference session replays its clips: a new env of our task, or a
-/// connection of its own to the remote env the trajectories were recorded on.
-pub(super) enum ClipEnv {
-    Builtin {
-        task: Task,
-        /// The task's version, to replay the clips in the env they were recorded in.
-        options: EnvOptions,
-    },
-    Remote {
-        reconnect: Reconnect,
-        /// Opened at the first query.
-        env: Option<Box<dyn Env>>,
-    },
-}
-
-impl ClipEnv {
-    fn render(
-        &mut self,
-        trajectory: &Trajectory,
-        clip: &Clip,
-    ) -> Result<query::Clip, SessionError> {
-        match self {
-            ClipEnv::Builtin { task, options } => {
-                Ok(query::render_clip(*task, options, trajectory, clip))
-            }
-            ClipEnv::Remote { reconnect, env } => {
-                if env.is_none() {
-                    *env = Some(reconnect()?);
-                }
-                let on = env.as_deref_mut().expect("connected above");
-                query::render_clip_on(on, trajectory, clip).map_err(|e| {
-                    // A broken connection is not used again.
-                    *env = None;
-                    SessionError::ClipReplay(e)
-                })
-            }
-        }
-    }
-}
-
-/// Who compares a preference session's pairs.
-pub(super) enum Comparer {
-    Human {
-        clips: ClipEnv,
-        graph: SceneGraph,
-        trajectories: Vec<Trajectory>,
-    },
-    Synthetic {
-        /// Boxed: a myopic teacher carries a copy of the pool's features.
-        oracle: Box<SimulatedTeacher>,
-        graph: SceneGraph,
-    },
-}
-
-pub(super) struct PreferenceAsker {
-    pub(super) asker: Asker,
-    pub(super) comparer: Comparer,
-}
-
-impl PreferenceTrainer for PreferenceAsker {
-    fn compare(&mut self, q: &PreferenceQuery<'_>) -> Preference {
-        let state = q.left.abstract_state.map_or(0, |s| s.0);
-        match &mut self.comparer {
-            Comparer::Human {
-                clips,
-                graph,
-                trajectories,
-            } => self
-                .asker
-                .ask(
-                    q.query as u64,
-                    state,
-                    QueryKind::Preference,
-                    describe_preference(graph, q),
-                    || {
-                        let content = QueryContent::Preference {
-                            left: clips.render(&trajectories[q.left.trajectory], q.left)?,
-                            right: clips.render(&trajectories[q.right.trajectory], q.right)?,
-                            left_holding: query::holding(graph, q.left.abstract_state),
-                            right_holding: query::holding(graph, q.right.abstract_state),
-                            predicate: q.predicate.map(|i| graph.predicates()[i]),
-                        };
-                        Ok((content, segments(q)))
-                    },
-                )
-                .and_then(AnswerValue::as_preference)
-                .unwrap_or(Preference::Skip),
-            Comparer::Synthetic { oracle, graph } => {
-                let p = oracle.compare(q);
-                let describe = if self.asker.observer.is_some() {
-                    describe_preference(graph, q)
-                } else {
-                    String::new()
-                };
-                self.asker.report(
-                    q.query as u64,
-                    state,
-                    QueryKind::Preference,
-                    describe,
-                    AnswerValue::Preference(p),
-                    segments(q),
-                );
-                p
             }
         }
     }
@@ -533,14 +406,6 @@ fn transition(q: &EvaluativeQuery<'_>) -> QueryData {
     }
 }
 
-/// A preference query's two segments, for datasets.
-fn segments(q: &PreferenceQuery<'_>) -> QueryData {
-    QueryData::Preference {
-        left: SegmentData::of(q.left),
-        right: SegmentData::of(q.right),
-    }
-}
-
 /// A query in words, for the recording.
 fn describe_evaluative(graph: &SceneGraph, q: &EvaluativeQuery<'_>) -> String {
     let action: Vec<String> = q.action.iter().map(|a| format!("{a:+.2}")).collect();
@@ -549,22 +414,5 @@ fn describe_evaluative(graph: &SceneGraph, q: &EvaluativeQuery<'_>) -> String {
         q.step,
         action.join(", "),
         graph.holding(q.abstract_state).join(", ")
-    )
-}
-
-fn describe_preference(graph: &SceneGraph, q: &PreferenceQuery<'_>) -> String {
-    let differ = q
-        .predicate
-        .map(|i| format!(" (they differ in \"{}\")", graph.predicates()[i].label))
-        .unwrap_or_default();
-    format!(
-        "query {}: trajectory {} steps {}..{} or trajectory {} steps {}..{}?{differ}",
-        q.query,
-        q.left.trajectory,
-        q.left.start,
-        q.left.end,
-        q.right.trajectory,
-        q.right.start,
-        q.right.end
     )
 }

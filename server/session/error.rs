@@ -6,7 +6,7 @@
 
 use std::path::PathBuf;
 
-use crate::guidance::evaluative_run::RunCheckpointError;
+use crate::guidance::evaluative_run::{RunCheckpointError, TakeInError};
 use crate::rl::CheckpointError;
 use crate::rl::kernels::KernelPath;
 use crate::sim::{EnvFault, Task};
@@ -69,6 +69,9 @@ pub enum SessionError {
     /// The notes kept with that checkpoint do not read.
     #[error("reading the latest checkpoint's notes: {0}")]
     ResumeNotes(serde_json::Error),
+    /// A stored answered step after that checkpoint does not fit the run.
+    #[error("taking in the answers given after the latest checkpoint: {0}")]
+    TakeIn(TakeInError),
     /// The env failed (its own words).
     #[error(transparent)]
     Env(#[from] EnvFault),

@@ -1,8 +1,8 @@
 //! An evaluative session's loop (DREF, EF-p%, SAC): one env step and one learning step per
 //! tick, paced for people, frames to browsers, queries through the asker, revisions (undos)
 //! applied, checkpoints. On our simulator a resume replays the stored answers from step 0; on
-//! a remote env it continues from the latest run checkpoint and catches up on the answers
-//! stored after it (module `remote`).
+//! a remote env it continues from the latest run checkpoint, catches up on the answers stored
+//! after it and takes in the answered steps it does not meet again (module `remote`).
 
 use std::time::Duration;
 
@@ -13,7 +13,7 @@ use super::events::{
 };
 use super::pacing::{Pacer, ProgressReports};
 use super::query::FrameHistory;
-use super::remote::{CheckpointRule, QueryNumbering, RemoteSession, ResumeNotes};
+use super::remote::{CheckpointRule, QueryNumbering, RemoteSession, ResumeNotes, take_in_given_up};
 use super::runner::{SessionContext, check_replay, halt_ending, revised};
 use super::spec::{SessionSettings, SessionSpec, TrainerKind};
 use crate::guidance::evaluative_run::{EvaluativeRun, EvaluativeRunConfig, StepReport};
@@ -138,6 +138,8 @@ pub(super) fn run(
             trainer
                 .asker
                 .continue_at(numbering.next, stored_queries, run.steps(), stored_moments);
+            // Stored with each query: what a later resume takes back in.
+            trainer.asker.keep_steps = true;
             let rule = CheckpointRule::new(settings.checkpoint_every, run.steps(), human);
             (
                 run,
@@ -183,7 +185,7 @@ fn drive(
         }
         let live = trainer.live();
         views.show(&run, &mut trainer, report, live);
-        checkpoints.after_step(&run, &mut trainer, views.episode)?;
+        checkpoints.after_step(&mut run, &mut trainer, views.episode)?;
         progress.tick(sink.as_ref(), run.steps());
         if live && let Some(h) = pacer.wait(&mut trainer.asker.controls) {
             return Ok(end_early(h, &run, sink.as_ref(), false));
@@ -370,11 +372,11 @@ impl Checkpoints {
         }
     }
 
-    /// After a step, in episode `episode`: checks the replay or settles the catch-up, and
-    /// checkpoints if one is due.
+    /// After a step, in episode `episode`: checks the replay, or settles the catch-up and takes
+    /// in what it gave up on; and checkpoints if one is due.
     fn after_step(
         &mut self,
-        run: &EvaluativeRun,
+        run: &mut EvaluativeRun,
         trainer: &mut EvaluativeAsker,
         episode: u64,
     ) -> Result<(), SessionError> {
@@ -388,7 +390,9 @@ impl Checkpoints {
             }
             Checkpoints::RemoteResumable { rule, numbering } => {
                 trainer.asker.settle_catch_up(run.steps());
-                numbering.lost.extend(trainer.asker.take_lost());
+                for given_up in trainer.asker.take_given_up() {
+                    take_in_given_up(run, numbering, given_up)?;
+                }
                 if trainer.asker.take_answered() {
                     rule.answered();
                 }

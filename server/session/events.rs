@@ -13,7 +13,7 @@ use crate::guidance::evaluative_trainer::{Evaluation, MeanLabel};
 use crate::scene_graph::{AbstractState, SceneGraph};
 use crate::sim::{Geometry, RenderState};
 
-use super::query::{QueryContent, QueryData};
+use super::query::{QueryContent, QueryRecord};
 
 /// Which answers a query takes: a +1 / 0 / -1 judgement (DREF, EF) or a preference between two
 /// segments (DRPL and the other preference methods).
@@ -217,8 +217,9 @@ pub enum SessionEvent {
         step: u64,
         abstract_state: u32,
         content: Box<QueryContent>,
-        /// What the learner saw (stored for datasets).
-        data: Box<QueryData>,
+        /// What the learner saw (stored for datasets), and a remote session's step as the run
+        /// stored it (stored with the query, before anyone can answer it).
+        record: Box<QueryRecord>,
     },
     /// A synthetic trainer's query and answer together (nobody waits).
     Answered {
@@ -227,7 +228,7 @@ pub enum SessionEvent {
         abstract_state: u32,
         kind: QueryKind,
         value: AnswerValue,
-        data: Box<QueryData>,
+        record: Box<QueryRecord>,
     },
     Episode(EpisodeRecord),
     /// A preference session's posterior after an answer.

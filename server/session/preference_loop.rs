@@ -2,10 +2,11 @@
 //! simulator, or on the remote env, keeping them for a resume), then pick a pair, ask, update
 //! the belief, query after query; a resume replays the stored answers over the same pool.
 
-use super::asker::{Asker, ClipEnv, Comparer, PreferenceAsker};
+use super::asker::Asker;
 use super::error::SessionError;
 use super::events::{AnswerValue, Checkpoint, Ending, Observer, SessionEvent};
 use super::pacing::ProgressReports;
+use super::preference_asker::{ClipEnv, Comparer, PreferenceAsker};
 use super::remote::RemoteSession;
 use super::runner::{SessionContext, check_replay, digest, halt_ending, revised};
 use super::spec::{SessionSpec, TrainerKind};

@@ -8,6 +8,7 @@ use serde::Serialize;
 
 use crate::guidance::drpl::pool;
 use crate::guidance::drpl::trajectories::Trajectory;
+use crate::guidance::evaluative_run::AskedStep;
 use crate::scene_graph::{AbstractState, Predicate, SceneGraph};
 use crate::sim::{Env, EnvFault, EnvOptions, Geometry, RenderState, Task};
 
@@ -61,6 +62,15 @@ pub enum QueryData {
         left: SegmentData,
         right: SegmentData,
     },
+}
+
+/// What a query keeps besides what people are shown: what the learner saw (datasets), and for
+/// a session on an env in another process the step as the run stored it (`query_transitions`),
+/// which a run resumed from an earlier checkpoint takes back in once it is answered.
+#[derive(Clone, Debug, PartialEq)]
+pub struct QueryRecord {
+    pub data: QueryData,
+    pub asked: Option<AskedStep>,
 }
 
 /// One side of a preference query.

@@ -4,6 +4,8 @@
 //!
 //! - `sessions`: launch config, status, progress.
 //! - `queries`: what was asked (kind, step, abstract state, payload) and the answers given.
+//! - `transitions`: the step each query of a session on a remote env asked about, as its run
+//!   stored it, and the stored moments such a session resumes with.
 //! - `answer_revisions`: undos and the answers given after them.
 //! - `episodes`: finished episodes' metrics.
 //! - `checkpoints`: where a session was, and the learner's digest.
@@ -34,6 +36,7 @@ mod sessions;
 mod studies;
 mod surveys;
 mod trainers;
+mod transitions;
 
 use std::path::Path;
 use std::str::FromStr;

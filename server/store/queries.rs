@@ -5,8 +5,10 @@
 use serde::Serialize;
 use sqlx::Row;
 
+use super::transitions::insert_asked_step;
 use super::{Result, Store};
-use crate::session::{AnswerValue, Answerer, QueryKind, StoredMoment};
+use crate::guidance::evaluative_run::AskedStep;
+use crate::session::{AnswerValue, Answerer, QueryKind};
 
 /// One asked query.
 #[derive(Clone, Debug, Serialize)]
@@ -60,6 +62,8 @@ pub struct SyntheticAnswer {
     pub value: AnswerValue,
     /// What the learner saw (JSON, see `queries.data`).
     pub data: Option<String>,
+    /// The step as the run stored it (sessions on a remote env; `query_transitions`).
+    pub asked: Option<AskedStep>,
 }
 
 pub(super) fn value_json(v: AnswerValue) -> String {
@@ -204,6 +208,9 @@ impl Store {
                 .bind(value_json(a.value))
                 .execute(&mut *tx)
                 .await?;
+                if let Some(step) = &a.asked {
+                    insert_asked_step(&mut *tx, id, session_id, step).await?;
+                }
             }
         }
         tx.commit().await
@@ -233,33 +240,6 @@ impl Store {
             }
         }
         Ok(out)
-    }
-
-    /// A session's evaluative queries in query order, each with the step and action it asked
-    /// about and its answer as first given (like `replay_answers`), if it has one: a session on
-    /// a remote env, resumed from a checkpoint, catches up on those stored after it.
-    pub async fn stored_moments(&self, session_id: &str) -> Result<Vec<StoredMoment>> {
-        let rows = sqlx::query(
-            "SELECT q.seq, q.step, json_extract(q.data, '$.action') AS action,
-                    COALESCE((SELECT r.value FROM answer_revisions r
-                              WHERE r.query_id = q.id AND r.revision = 0), a.value) AS value
-             FROM queries q LEFT JOIN answers a ON a.query_id = q.id
-             WHERE q.session_id = ? AND q.kind = 'evaluative' ORDER BY q.seq",
-        )
-        .bind(session_id)
-        .fetch_all(self.pool())
-        .await?;
-        Ok(rows
-            .iter()
-            .map(|r| StoredMoment {
-                seq: r.get::<i64, _>("seq") as u64,
-                step: r.get::<i64, _>("step") as u64,
-                action: r
-                    .get::<Option<String>, _>("action")
-                    .and_then(|a| serde_json::from_str(&a).ok()),
-                value: r.get::<Option<String>, _>("value").map(|v| parse_value(&v)),
-            })
-            .collect())
     }
 
     /// Every answered query of a session, in the order asked.

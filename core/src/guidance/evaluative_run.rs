@@ -97,8 +97,12 @@ pub struct EvaluativeRun {
     /// Queries the method wanted that a person's pace held back.
     held_back: u64,
     /// Per query, in order: the step it judged and the replay slot of that transition, so an
-    /// answer can be revised (a trainer's undo) after the run moved on.
+    /// answer can be revised (a trainer's undo) after the run moved on. (A step taken in
+    /// after a resume, `run_take_in`, counts at the step it was taken in at.)
     queried: Vec<(u64, usize)>,
+    /// Rows pushed into the replay buffer besides one per step: answered steps taken in after
+    /// a resume (`run_take_in`).
+    taken_in: u64,
     /// Floods and silences of the rule.
     pacing: AskPacing,
     /// The next episode's first observation when the env was reset before the episode was
@@ -152,6 +156,7 @@ impl EvaluativeRun {
             no_feedback_count: 0,
             held_back: 0,
             queried: Vec::new(),
+            taken_in: 0,
             pacing: AskPacing::default(),
             next_episode_obs: None,
         })
@@ -246,6 +251,9 @@ impl EvaluativeRun {
 
         // The schedule decides first (EF's coin is drawn every step either way); a person's
         // pace may then hold the query back.
+        let terminated = step.terminated
+            || (self.config.time_limit == TimeLimitEnd::Terminal
+                && step.outcome == Some(Outcome::TimeLimit));
         let wanted = self.schedule.should_ask(g);
         let asks = wanted
             && self
@@ -260,6 +268,7 @@ impl EvaluativeRun {
                 action: &self.action,
                 next_obs: &step.obs,
                 reward: step.reward,
+                terminated,
                 abstract_state: g,
                 predicted,
             };
@@ -280,9 +289,7 @@ impl EvaluativeRun {
             reward: step.reward * self.config.reward_scale,
             human: evaluation.map_or(0.0, Evaluation::value),
             next_obs: &step.obs,
-            terminated: step.terminated
-                || (self.config.time_limit == TimeLimitEnd::Terminal
-                    && step.outcome == Some(Outcome::TimeLimit)),
+            terminated,
         });
         if evaluation.is_some() {
             self.queried.push((self.steps, slot));
@@ -319,7 +326,8 @@ impl EvaluativeRun {
         let Some(&(step, slot)) = self.queried.get(query) else {
             return false;
         };
-        if self.steps - step > self.replay.capacity() as u64 {
+        // Rows pushed since, at most (rows taken in after a resume may have come between).
+        if self.steps + self.taken_in - step > self.replay.capacity() as u64 {
             return false;
         }
         let old = Evaluation::from_value(self.replay.human(slot) as i64);
@@ -438,6 +446,10 @@ pub fn evaluate_policy_on(
 #[path = "run_checkpoint.rs"]
 mod run_checkpoint;
 pub use run_checkpoint::RunCheckpointError;
+
+#[path = "run_take_in.rs"]
+mod run_take_in;
+pub use run_take_in::{AskedStep, TakeInError};
 
 #[cfg(test)]
 #[path = "evaluative_run_tests.rs"]

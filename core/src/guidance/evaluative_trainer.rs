@@ -113,6 +113,9 @@ pub struct EvaluativeQuery<'a> {
     pub next_obs: &'a [f32],
     /// The env's reward for the step (before any `reward_scale`).
     pub reward: f32,
+    /// Whether the run stores the step as an end of the MDP (no bootstrap past it): the env
+    /// terminated, or hit its time limit where the run's `time_limit` counts that as an end.
+    pub terminated: bool,
     /// The scene graph on `(s_{t+1}, a_t)`.
     pub abstract_state: AbstractState,
     /// The human critic's prediction `H_hat(s_t, a_t)` before this step's update.

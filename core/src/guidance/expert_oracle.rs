@@ -328,6 +328,7 @@ mod tests {
                 action: &action,
                 next_obs: obs,
                 reward: 0.0,
+                terminated: false,
                 abstract_state: AbstractState(0),
                 predicted: 0.0,
             };

@@ -14,7 +14,9 @@
 //! - `agreement`: how much trainers agree (Krippendorff's alpha, Fleiss' kappa).
 //! - `evaluative_config`: what defines a run (task, method, constants; its `config.json`).
 //! - `evaluative_run`: one SAC / EF-p% / DREF run, step by step, and policy evaluation; its
-//!   `run_checkpoint` saves a whole run between episodes so a long one resumes bit for bit.
+//!   `run_checkpoint` saves a whole run between episodes so a long one resumes bit for bit, and
+//!   its `run_take_in` gives a resumed run the steps answered after its checkpoint (a session
+//!   on a remote env, whose robot does not bring those moments back).
 //! - `drpl`: what to ask: DRPL's scene-graph segments and pairs, its baselines, the belief over
 //!   the reward weights (APReL's sampling-based belief), acquisition, the synthetic preference
 //!   oracle and the preference run.

@@ -72,6 +72,10 @@ struct RunState {
     episode_seeds: RngState,
     schedule: ScheduleState,
     queried: Vec<(u64, usize)>,
+    /// Replay rows taken in besides the steps (checkpoints written before it existed read as
+    /// none).
+    #[serde(default)]
+    taken_in: u64,
     /// The rule's floods and silences (checkpoints written before it existed read as none).
     #[serde(default)]
     pacing: AskPacing,
@@ -147,6 +151,7 @@ impl EvaluativeRun {
             episode_seeds: RngState::of(&self.episode_seeds),
             schedule: ScheduleState::of(&self.schedule),
             queried: self.queried.clone(),
+            taken_in: self.taken_in,
             pacing: self.pacing,
             replay,
             trainer: trainer.checkpoint_state(),
@@ -180,6 +185,21 @@ impl EvaluativeRun {
         }
         let state: Kernels = serde_json::from_slice(state).map_err(RunCheckpointError::State)?;
         Ok(state.kernels)
+    }
+
+    /// The replay buffer a checkpoint holds (what its learner trains on), read without
+    /// resuming the run: to see which answers a stopped session's learner had.
+    pub fn checkpoint_replay(bytes: &[u8]) -> Result<ReplayBuffer, RunCheckpointError> {
+        use RunCheckpointError as E;
+        let rest = bytes.strip_prefix(MAGIC).ok_or(E::NotACheckpoint)?;
+        let (state, rest) = split_blob(rest).ok_or(E::Truncated("state"))?;
+        let (_, rows) = split_blob(rest).ok_or(E::Truncated("learner"))?;
+        #[derive(Deserialize)]
+        struct Replay {
+            replay: ReplayLayout,
+        }
+        let state: Replay = serde_json::from_slice(state).map_err(E::State)?;
+        ReplayBuffer::from_bytes(&state.replay, rows).map_err(E::Replay)
     }
 
     /// The run [`EvaluativeRun::checkpoint`] saved, with `trainer` put back to its state then,
@@ -241,6 +261,7 @@ impl EvaluativeRun {
             no_feedback_count: state.no_feedback_count,
             held_back: state.held_back,
             queried: state.queried,
+            taken_in: state.taken_in,
             pacing: state.pacing,
             next_episode_obs: None,
         };

@@ -161,6 +161,11 @@ impl ReplayBuffer {
         self.human[slot]
     }
 
+    /// The action stored in `slot`.
+    pub fn action(&self, slot: usize) -> &[f32] {
+        &self.actions[slot * self.act_dim..(slot + 1) * self.act_dim]
+    }
+
     /// The filled rows as little-endian f32 bytes, array after array (observations, actions,
     /// rewards, H, next observations, dones), for a run's checkpoint; with [`ReplayLayout`].
     pub fn to_bytes(&self) -> (ReplayLayout, Vec<u8>) {
