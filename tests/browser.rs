@@ -117,9 +117,9 @@ struct Server {
 }
 
 impl Server {
-    fn start() -> Server {
+    fn start(args: &[&str]) -> Server {
         let data = tempfile::tempdir().expect("a temp dir");
-        let (child, url) = binary::start_serve(data.path(), TOKEN, &[], Stdio::inherit());
+        let (child, url) = binary::start_serve(data.path(), TOKEN, args, Stdio::inherit());
         Server {
             child,
             url,
@@ -137,10 +137,18 @@ impl Drop for Server {
 
 /// Run `tests/browser/<script>` against a fresh server; `extra` adds environment variables.
 fn browser_test(script: &str, extra: &[(&str, &str)]) {
+    browser_test_serving(script, extra, &[]);
+}
+
+/// [`browser_test`] with `serve_args` added to `dualrep serve`; false when the browser tests
+/// are skipped (`DUALREP_SKIP_BROWSER=1`), true once the script passed.
+fn browser_test_serving(script: &str, extra: &[(&str, &str)], serve_args: &[&str]) -> bool {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let Some(chromium) = chromium() else { return };
+    let Some(chromium) = chromium() else {
+        return false;
+    };
     node_modules();
-    let server = Server::start();
+    let server = Server::start(serve_args);
     let artifacts = artifacts();
     std::fs::create_dir_all(&artifacts).expect("creating the artifacts dir");
     let started = Instant::now();
@@ -166,6 +174,7 @@ fn browser_test(script: &str, extra: &[(&str, &str)]) {
         started.elapsed().as_secs_f64(),
         out.status
     );
+    true
 }
 
 #[test]
@@ -201,6 +210,43 @@ fn review_shows_episodes_answers_and_metrics() {
 #[test]
 fn review_replays_an_episode() {
     browser_test("review.mjs", &[("REPLAY", "1")]);
+}
+
+#[test]
+fn study_participants_train_every_condition_in_their_williams_order_and_the_results_count_them() {
+    // Two sessions at once: of three participants starting together, one waits in the queue.
+    let table = artifacts().join("study-table.parquet");
+    let _ = std::fs::remove_file(&table);
+    if !browser_test_serving("study.mjs", &[], &["--max-sessions", "2"]) {
+        return;
+    }
+    // The Parquet table the results page downloaded, as pandas or R would read it.
+    let read = crate::support::pyarrow_py::read_parquet(&table);
+    assert_eq!(read["num_rows"], 9, "three participants x three conditions");
+    let rows = read["rows"].as_array().unwrap();
+    let mut cells: Vec<(String, String)> = rows
+        .iter()
+        .map(|r| {
+            (
+                r["participant_id"].as_str().unwrap().to_string(),
+                r["condition"].as_str().unwrap().to_string(),
+            )
+        })
+        .collect();
+    cells.sort();
+    cells.dedup();
+    assert_eq!(
+        cells.len(),
+        9,
+        "each participant x condition once: {cells:?}"
+    );
+    for row in rows {
+        for q in ["E", "I", "C"] {
+            let answer = row[format!("survey_{q}")].as_i64();
+            assert!(matches!(answer, Some(1..=5)), "survey_{q} in {row}");
+        }
+        assert_eq!(row["ended_early"], false, "{row}");
+    }
 }
 
 #[test]

@@ -1,6 +1,6 @@
 // The dashboard (/): researcher token, launch form built from GET /api/tasks, the sessions
 // table with live status, live plots of the selected session, and its named trainers (invite
-// one: a link of their own).
+// one: a link of their own); the studies, each with its participant link and results page.
 
 import { ApiError, download, getJson, getToken, postJson, setToken } from "./api.js";
 import { notify, notifyError } from "./notify.js";
@@ -260,7 +260,33 @@ async function refresh() {
     return;
   }
   render();
-  await showDetail();
+  await Promise.all([showDetail(), showStudies()]);
+}
+
+// ---- studies --------------------------------------------------------------------------------
+
+async function showStudies() {
+  let studies;
+  try {
+    studies = await getJson("/api/studies");
+  } catch (e) {
+    notify(`The studies could not be loaded: ${e.message}`, { kind: "error", key: "studies" });
+    return;
+  }
+  $("studies").replaceChildren(
+    ...studies.map((s) => {
+      const li = document.createElement("li");
+      li.dataset.study = s.id;
+      const link = new URL(s.link, location.origin).href;
+      li.append(
+        Object.assign(document.createElement("a"), { href: `/study.html?id=${encodeURIComponent(s.id)}`, textContent: s.title, className: "study-results" }),
+        Object.assign(document.createElement("span"), { className: "muted small", textContent: `${s.participants} participant${s.participants === 1 ? "" : "s"}` }),
+        Object.assign(document.createElement("a"), { href: link, textContent: link, className: "study-link small", title: "The link to send to every participant" }),
+      );
+      return li;
+    }),
+  );
+  $("studies-empty").classList.toggle("hidden", studies.length > 0);
 }
 
 function poll() {

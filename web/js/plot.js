@@ -31,7 +31,8 @@ function fmt(v) {
 }
 
 /**
- * Render `series` (`[{label, points: [[x, y]...], color?}]`) into `container` as an SVG.
+ * Render `series` (`[{label, points: [[x, y]...], color?, band?}]`) into `container` as an SVG;
+ * `band` (`[[x, low, high]...]`) is shaded behind its line (e.g. mean ± s.e.).
  * `opts`: `{width, height, xLabel, yLabel, yMin, yMax, empty}`.
  */
 export function linePlot(container, series, opts = {}) {
@@ -39,7 +40,8 @@ export function linePlot(container, series, opts = {}) {
   const height = opts.height ?? 140;
   const pad = { l: 40, r: 8, t: series.some((s) => s.label) ? 18 : 8, b: opts.xLabel ? 30 : 18 };
   const svg = el("svg", { viewBox: `0 0 ${width} ${height}`, role: "img", "aria-label": opts.title ?? opts.yLabel ?? "plot" });
-  const all = series.flatMap((s) => s.points).filter(([x, y]) => Number.isFinite(x) && Number.isFinite(y));
+  const bands = series.flatMap((s) => (s.band ?? []).flatMap(([x, lo, hi]) => [[x, lo], [x, hi]]));
+  const all = series.flatMap((s) => s.points).concat(bands).filter(([x, y]) => Number.isFinite(x) && Number.isFinite(y));
   container.replaceChildren(svg);
   container.classList.add("plot");
   if (all.length === 0) {
@@ -70,6 +72,11 @@ export function linePlot(container, series, opts = {}) {
   series.forEach((s, i) => {
     const color = s.color ?? PALETTE[i % PALETTE.length];
     const pts = s.points.filter(([x, y]) => Number.isFinite(x) && Number.isFinite(y));
+    const band = (s.band ?? []).filter((p) => p.every(Number.isFinite));
+    if (band.length > 1) {
+      const edge = band.map(([x, , hi]) => [x, hi]).concat(band.map(([x, lo]) => [x, lo]).reverse());
+      svg.append(el("path", { d: `${edge.map(([x, y], j) => `${j ? "L" : "M"}${X(x).toFixed(1)},${Y(y).toFixed(1)}`).join("")}Z`, class: "band", fill: color }));
+    }
     if (pts.length === 1) {
       svg.append(el("circle", { cx: X(pts[0][0]), cy: Y(pts[0][1]), r: 3, fill: color }));
     } else if (pts.length > 1) {

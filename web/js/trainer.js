@@ -2,7 +2,9 @@
 // answers by key or click, progress, undo, and the three questions at the end. On the session's
 // shared link the page asks for a name: joining gives this person a link of their own (kept in
 // this browser), so every answer is stored with who gave it; sessions that take several
-// answers per query count only named trainers' answers.
+// answers per query count only named trainers' answers. A study's session comes with
+// `&next=/study/...` (the participant's own page): the page asks no name, and at the end it
+// offers "Continue the study" there instead of its three questions (the study asks its own).
 
 import { ClipLoop } from "./clip.js";
 import { notify } from "./notify.js";
@@ -24,6 +26,21 @@ const sessionId = decodeURIComponent(location.pathname.split("/").filter(Boolean
 const NAMED_KEY = `dualrep.trainer.${sessionId}`;
 // A trainer who named themself on this session before comes back under their own token.
 let token = localStorage.getItem(NAMED_KEY) || new URLSearchParams(location.search).get("token") || "";
+
+/** `?next=`: where a study continues, only a path on this server under /study/; else null. */
+function studyNext() {
+  const raw = new URLSearchParams(location.search).get("next");
+  if (!raw || !raw.startsWith("/study/") || raw.includes("\\")) return null;
+  let url;
+  try {
+    url = new URL(raw, location.origin);
+  } catch {
+    return null;
+  }
+  if (url.origin !== location.origin || !url.pathname.startsWith("/study/")) return null;
+  return url.pathname + url.search + url.hash;
+}
+const NEXT = studyNext();
 
 const page = {
   hello: null,
@@ -267,7 +284,12 @@ function showEnd(msg) {
   if (msg.reason) $("prompt").textContent += ` ${msg.reason}`;
   setState("ended");
   $("live").classList.add("hidden");
-  if (page.hello && page.acked.size + page.history.length > 0) {
+  if (NEXT) {
+    // A study's session: the study's page asks about it.
+    $("continue").href = NEXT;
+    $("continue-box").classList.remove("hidden");
+    $("continue").focus();
+  } else if (page.hello && page.acked.size + page.history.length > 0) {
     const seconds = page.firstQueryAt && page.lastAnswerAt ? Math.round((page.lastAnswerAt - page.firstQueryAt) / 1000) : 0;
     $("summary").textContent = `You answered ${page.acked.size} question${page.acked.size === 1 ? "" : "s"} over ${seconds} s on this page, ${page.noFeedback} of them without feedback. Three quick questions, 1 to 5:`;
     $("survey").classList.remove("hidden");
@@ -388,7 +410,8 @@ function showWho(hello) {
     document.body.dataset.trainer = named.name;
   }
   const ended = ["finished", "failed", "stopped", "interrupted"].includes(hello.status);
-  const ask = !named && !ended;
+  // A study's participants stay pseudonymous: no name asked.
+  const ask = !named && !ended && !NEXT;
   $("name-form").classList.toggle("hidden", !ask);
   $("name-why").textContent =
     hello.answers_per_query > 1
