@@ -5,6 +5,7 @@
 
 use std::time::{Duration, Instant};
 
+use crate::support::binary::start_serve;
 use crate::support::cli::dualrep_in;
 use crate::support::pyarrow_py::read_parquet;
 use crate::support::rest::{Reply, call};
@@ -375,4 +376,57 @@ async fn a_study_that_cannot_run_is_refused_naming_what_is_wrong() {
         .await
         .json();
     assert_eq!(studies, json!([]));
+}
+
+#[test]
+fn the_cli_creates_and_lists_studies_on_a_running_server() {
+    let data = tempfile::tempdir().unwrap();
+    let (mut server, url) = start_serve(data.path(), TOKEN, &[], std::process::Stdio::inherit());
+    let spec = data.path().join("study.json");
+    std::fs::write(&spec, study_body("From the CLI").to_string()).unwrap();
+    let spec = spec.to_str().unwrap();
+    let create = dualrep_in(
+        &[
+            "study", "create", "--addr", &url, "--token", TOKEN, "--spec", spec,
+        ],
+        None,
+    );
+    let stdout = String::from_utf8_lossy(&create.stdout).to_string();
+    assert!(
+        create.status.success(),
+        "{}",
+        String::from_utf8_lossy(&create.stderr)
+    );
+    assert!(
+        stdout.contains(&format!("participant link: {url}/study/")),
+        "{stdout}"
+    );
+    let list = dualrep_in(&["study", "list", "--addr", &url, "--token", TOKEN], None);
+    assert!(String::from_utf8_lossy(&list.stdout).contains("From the CLI"));
+    // A study the server refuses is refused by the CLI with the server's message.
+    let mut bad = study_body("Bad");
+    bad["survey"] = json!([]);
+    let bad_spec = data.path().join("bad.json");
+    std::fs::write(&bad_spec, bad.to_string()).unwrap();
+    let refused = dualrep_in(
+        &[
+            "study",
+            "create",
+            "--addr",
+            &url,
+            "--token",
+            TOKEN,
+            "--spec",
+            bad_spec.to_str().unwrap(),
+        ],
+        None,
+    );
+    assert!(!refused.status.success());
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        stderr.contains("survey: needs at least one question"),
+        "{stderr}"
+    );
+    let _ = server.kill();
+    let _ = server.wait();
 }

@@ -22,6 +22,7 @@ pub mod serve;
 mod settings_reach;
 mod sim;
 mod study;
+mod study_server;
 mod train;
 
 use clap::{Parser, Subcommand};
@@ -60,8 +61,8 @@ pub enum Command {
     /// Time the learner: `bench sac` (updates per second against the FMA peak), `bench train`
     /// (environment steps per second of a whole run), `bench kernels`, `bench belief`.
     Bench(bench::BenchArgs),
-    /// Human-subject studies: `study pilot` estimates a study's power with simulated
-    /// participants before anyone is recruited.
+    /// Human-subject studies: `study create` and `study list` on a running server; `study
+    /// pilot` estimates a study's power with simulated participants before anyone is recruited.
     Study(study::StudyArgs),
     /// Reports from a data dir: `report study` writes a study's results, tidy table (CSV,
     /// Parquet) and figure (SVG, PNG).

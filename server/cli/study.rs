@@ -1,4 +1,5 @@
-//! `dualrep study`: tools for human-subject studies. `study pilot` runs a study's design with
+//! `dualrep study`: tools for human-subject studies. `study create` and `study list` talk to a
+//! running server (`study_server`); `study pilot` runs a study's design with
 //! simulated participants and estimates its power at several sizes (`study::pilot`), writing
 //! `pilot.json`, `pilot.md` and `participants.csv` into `--out` and the tables to stdout.
 
@@ -25,6 +26,10 @@ pub enum StudyWhat {
     /// A power estimate before anyone is recruited: the study run with simulated participants,
     /// and the share of simulated studies in which its main contrast is significant at each n.
     Pilot(PilotArgs),
+    /// Create a study on a running server from its spec file; prints its participant link.
+    Create(super::study_server::CreateArgs),
+    /// The studies of a running server: id, participants, link, title.
+    List(super::study_server::ListArgs),
 }
 
 #[derive(Debug, Args)]
@@ -62,6 +67,11 @@ pub struct PilotArgs {
 pub fn run(args: StudyArgs) -> anyhow::Result<()> {
     match args.what {
         StudyWhat::Pilot(args) => pilot(args),
+        StudyWhat::Create(args) => {
+            let spec = read_value(&args.spec)?;
+            super::study_server::create(args, spec)
+        }
+        StudyWhat::List(args) => super::study_server::list(args),
     }
 }
 

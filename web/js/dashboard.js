@@ -289,6 +289,45 @@ async function showStudies() {
   $("studies-empty").classList.toggle("hidden", studies.length > 0);
 }
 
+// The paper's Figure 4 design on Reaching, as a starting point a researcher edits.
+const EXAMPLE_STUDY = {
+  title: "Teaching a robot arm",
+  conditions: [
+    { name: "dref", task: "reaching", method: "dref" },
+    { name: "ef-50", task: "reaching", method: "ef-50" },
+    { name: "sac", task: "reaching", method: "sac" },
+  ],
+  budget: { steps: 6000 },
+};
+
+async function createStudy(ev) {
+  ev.preventDefault();
+  let spec;
+  try {
+    spec = JSON.parse($("study-spec").value);
+  } catch (e) {
+    notify(`The study is not valid JSON: ${e.message}`, { kind: "error" });
+    return;
+  }
+  $("create-study").disabled = true;
+  try {
+    const study = await postJson("/api/studies", spec);
+    const link = new URL(study.link, location.origin).href;
+    notify(`Study created. Send this link to every participant: ${link}`, { kind: "ok", timeoutMs: 0 });
+    $("new-study").open = false;
+    await showStudies();
+  } catch (e) {
+    notify(`The study was not created: ${e.message}`, { kind: "error", timeoutMs: 0 });
+  } finally {
+    $("create-study").disabled = false;
+  }
+}
+
+function setUpStudyForm() {
+  $("study-spec").value = JSON.stringify(EXAMPLE_STUDY, null, 2);
+  $("study-form").addEventListener("submit", createStudy);
+}
+
 function poll() {
   clearTimeout(state.pollTimer);
   refresh().finally(() => {
@@ -391,6 +430,7 @@ async function invite(ev) {
 // ---- start ----------------------------------------------------------------------------------
 
 $("invite-form").addEventListener("submit", invite);
+setUpStudyForm();
 
 $("login-form").addEventListener("submit", (ev) => {
   ev.preventDefault();
