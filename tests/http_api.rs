@@ -1,9 +1,7 @@
 //! The REST handlers through `app().oneshot(...)`: auth, launch validation, the error shape, the
 //! self-description, and a synthetic preference session from launch to export.
 
-use std::time::{Duration, Instant};
-
-use crate::support::rest::call;
+use crate::support::rest::{call, poll_json};
 use crate::support::server::{TOKEN, state, state_with};
 use axum::http::StatusCode;
 use dualrep::http::{app, openapi};
@@ -11,23 +9,11 @@ use serde_json::{Value, json};
 
 /// The session once it is neither queued nor running (a minute at most).
 async fn settled(router: &axum::Router, id: &str) -> Value {
-    let start = Instant::now();
-    loop {
-        let s = call(
-            router,
-            "GET",
-            &format!("/api/sessions/{id}"),
-            Some(TOKEN),
-            None,
-        )
-        .await
-        .json();
-        if s["status"] != "queued" && s["status"] != "running" {
-            return s;
-        }
-        assert!(start.elapsed() < Duration::from_secs(60), "{s}");
-        tokio::time::sleep(Duration::from_millis(20)).await;
-    }
+    let uri = format!("/api/sessions/{id}");
+    poll_json(router, &uri, Some(TOKEN), |s| {
+        s["status"] != "queued" && s["status"] != "running"
+    })
+    .await
 }
 
 #[tokio::test]

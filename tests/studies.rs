@@ -3,12 +3,10 @@
 //! times out as no feedback), answer the survey after each; bad input is refused by name and
 //! loses nothing; results and the tidy table count every participant × condition.
 
-use std::time::{Duration, Instant};
-
 use crate::support::binary::start_serve;
 use crate::support::cli::dualrep_in;
 use crate::support::pyarrow_py::read_parquet;
-use crate::support::rest::{Reply, call};
+use crate::support::rest::{Reply, call, poll_json};
 use crate::support::server::{TOKEN, state};
 use axum::http::StatusCode;
 use dualrep::http::app;
@@ -71,15 +69,13 @@ async fn post(router: &axum::Router, uri: &str, body: Option<Value>) -> Reply {
 
 /// The participant's view once their step is no longer `training` (a minute at most).
 async fn until_survey(router: &axum::Router, base: &str) -> Value {
-    let start = Instant::now();
-    loop {
-        let v = call(router, "GET", base, None, None).await.json();
-        if v["step"]["step"] != "training" {
-            return v;
-        }
-        assert!(start.elapsed() < Duration::from_secs(60), "{v}");
-        tokio::time::sleep(Duration::from_millis(20)).await;
-    }
+    poll_json(router, base, None, |v| v["step"]["step"] != "training").await
+}
+
+/// A researcher's GET of the study's `path` (after `/api/studies/{id}`).
+async fn of_study(router: &axum::Router, study: &Value, path: &str) -> Reply {
+    let uri = format!("/api/studies/{}{path}", study["id"].as_str().unwrap());
+    call(router, "GET", &uri, Some(TOKEN), None).await
 }
 
 #[tokio::test]
@@ -195,27 +191,11 @@ async fn participants_follow_their_williams_order_and_the_results_count_each_of_
         }
     }
 
-    let detail = call(
-        &router,
-        "GET",
-        &format!("/api/studies/{}", study["id"].as_str().unwrap()),
-        Some(TOKEN),
-        None,
-    )
-    .await
-    .json();
+    let detail = of_study(&router, &study, "").await.json();
     assert_eq!(detail["participants"], 3);
     assert_eq!(detail["participants_detail"][2]["step"]["step"], "training");
 
-    let results = call(
-        &router,
-        "GET",
-        &format!("/api/studies/{}/results", study["id"].as_str().unwrap()),
-        Some(TOKEN),
-        None,
-    )
-    .await
-    .json();
+    let results = of_study(&router, &study, "/results").await.json();
     assert_eq!(results["participants"], 3);
     assert_eq!(results["complete"], 2);
     for c in results["conditions"].as_array().unwrap() {
@@ -231,17 +211,7 @@ async fn participants_follow_their_williams_order_and_the_results_count_each_of_
     assert_eq!(results["tests"][0]["tests"]["participants"], 2);
     assert!(results["tests"][0]["tests"]["caution"].is_string());
 
-    let csv = call(
-        &router,
-        "GET",
-        &format!(
-            "/api/studies/{}/table?format=csv",
-            study["id"].as_str().unwrap()
-        ),
-        Some(TOKEN),
-        None,
-    )
-    .await;
+    let csv = of_study(&router, &study, "/table?format=csv").await;
     assert_eq!(csv.content_type, "text/csv");
     let text = String::from_utf8(csv.body).unwrap();
     // Two participants × three conditions, and the abandoned one's first session.
@@ -252,30 +222,11 @@ async fn participants_follow_their_williams_order_and_the_results_count_each_of_
             .unwrap()
             .ends_with("survey_E,survey_trust")
     );
-    let parquet = call(
-        &router,
-        "GET",
-        &format!(
-            "/api/studies/{}/table?format=parquet",
-            study["id"].as_str().unwrap()
-        ),
-        Some(TOKEN),
-        None,
-    )
-    .await;
+    let parquet = of_study(&router, &study, "/table?format=parquet").await;
     assert_eq!(&parquet.body[..4], b"PAR1");
-    call(
-        &router,
-        "GET",
-        &format!(
-            "/api/studies/{}/table?format=xlsx",
-            study["id"].as_str().unwrap()
-        ),
-        Some(TOKEN),
-        None,
-    )
-    .await
-    .assert_error(StatusCode::BAD_REQUEST, "bad_request");
+    of_study(&router, &study, "/table?format=xlsx")
+        .await
+        .assert_error(StatusCode::BAD_REQUEST, "bad_request");
 
     // `dualrep report study` from the data dir writes the same results, the table (read back by
     // pyarrow) and the figure.

@@ -67,3 +67,24 @@ pub async fn call(
         body,
     }
 }
+
+/// `GET uri` every 20 ms until `done` holds for its JSON (a minute at most), then that JSON.
+pub async fn poll_json(
+    router: &axum::Router,
+    uri: &str,
+    token: Option<&str>,
+    done: impl Fn(&Value) -> bool,
+) -> Value {
+    let start = std::time::Instant::now();
+    loop {
+        let v = call(router, "GET", uri, token, None).await.json();
+        if done(&v) {
+            return v;
+        }
+        assert!(
+            start.elapsed() < std::time::Duration::from_secs(60),
+            "{uri}: {v}"
+        );
+        tokio::time::sleep(std::time::Duration::from_millis(20)).await;
+    }
+}
