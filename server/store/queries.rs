@@ -105,21 +105,22 @@ impl Store {
         let now = clock::now();
         Ok(on_db!(self.db, writer, |pool| {
             sqlx::query_scalar(
-            "INSERT INTO queries (session_id, seq, kind, step, abstract_state, payload, data, asked_at)
-             VALUES ($1, $2, $3, $4, $5, $6, $7, $8)
-             ON CONFLICT (session_id, seq) DO UPDATE SET asked_at = excluded.asked_at
-             RETURNING id",
-        )
-        .bind(session_id)
-        .bind(seq as i64)
-        .bind(kind)
-        .bind(step as i64)
-        .bind(i64::from(abstract_state))
-        .bind(payload)
-        .bind(data)
-        .bind(&now)
-        .fetch_one(pool)
-        .await?
+                "INSERT INTO queries
+                   (session_id, seq, kind, step, abstract_state, payload, data, asked_at)
+                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8)
+                 ON CONFLICT (session_id, seq) DO UPDATE SET asked_at = excluded.asked_at
+                 RETURNING id",
+            )
+            .bind(session_id)
+            .bind(seq as i64)
+            .bind(kind)
+            .bind(step as i64)
+            .bind(i64::from(abstract_state))
+            .bind(payload)
+            .bind(data)
+            .bind(&now)
+            .fetch_one(pool)
+            .await?
         }))
     }
 

@@ -234,18 +234,18 @@ impl Store {
     /// At start: sessions that were running when the server went away become `interrupted`
     /// (resumable); queued ones stay queued and are started again. Returns both lists.
     pub async fn recover_after_restart(&self) -> Result<(Vec<String>, Vec<String>)> {
-        let interrupted: Vec<String> =
-            on_db!(self.db, writer, |pool| {
-                sqlx::query(
-            "UPDATE sessions SET status = 'interrupted', reason = 'the server stopped while it ran'
-             WHERE status IN ('running', 'waiting') RETURNING id",
-        )
-        .fetch_all(pool)
-        .await?
-        .iter()
-        .map(|r| r.get("id"))
-        .collect()
-            });
+        let interrupted: Vec<String> = on_db!(self.db, writer, |pool| {
+            sqlx::query(
+                "UPDATE sessions SET status = 'interrupted',
+                   reason = 'the server stopped while it ran'
+                 WHERE status IN ('running', 'waiting') RETURNING id",
+            )
+            .fetch_all(pool)
+            .await?
+            .iter()
+            .map(|r| r.get("id"))
+            .collect()
+        });
         let queued = on_db!(self.db, reader, |pool| sqlx::query(
             "SELECT id FROM sessions WHERE status = 'queued' ORDER BY created_at"
         )

@@ -329,11 +329,12 @@ impl Store {
     pub async fn answered_positions(&self, participant_id: &str) -> Result<Vec<i64>> {
         on_db!(self.db, reader, |pool| {
             sqlx::query_scalar(
-            "SELECT DISTINCT position FROM study_answers WHERE participant_id = $1 ORDER BY position",
-        )
-        .bind(participant_id)
-        .fetch_all(pool)
-        .await
+                "SELECT DISTINCT position FROM study_answers WHERE participant_id = $1
+                 ORDER BY position",
+            )
+            .bind(participant_id)
+            .fetch_all(pool)
+            .await
         })
     }
 }

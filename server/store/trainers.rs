@@ -227,21 +227,22 @@ impl Store {
     pub async fn query_votes(&self, query_id: i64) -> Result<Vec<(TrainerRef, AnswerValue)>> {
         on_db!(self.db, reader, |pool| {
             Ok(sqlx::query(
-            "SELECT t.id, t.name, v.value FROM trainer_answers v JOIN trainers t ON t.id = v.trainer_id
-             WHERE v.query_id = $1 ORDER BY v.rowid",
-        )
-        .bind(query_id)
-        .fetch_all(pool)
-        .await?
-        .iter()
-        .map(|r| {
-            let who = TrainerRef {
-                id: r.get("id"),
-                name: r.get("name"),
-            };
-            (who, parse_value(&r.get::<String>("value")))
-        })
-        .collect())
+                "SELECT t.id, t.name, v.value
+                 FROM trainer_answers v JOIN trainers t ON t.id = v.trainer_id
+                 WHERE v.query_id = $1 ORDER BY v.rowid",
+            )
+            .bind(query_id)
+            .fetch_all(pool)
+            .await?
+            .iter()
+            .map(|r| {
+                let who = TrainerRef {
+                    id: r.get("id"),
+                    name: r.get("name"),
+                };
+                (who, parse_value(&r.get::<String>("value")))
+            })
+            .collect())
         })
     }
 
