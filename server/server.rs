@@ -22,8 +22,11 @@ use crate::store::Store;
 /// Everything a server needs to know.
 #[derive(Clone, Debug)]
 pub struct ServerConfig {
-    /// Where the database, checkpoints, recordings and frames live.
+    /// Where checkpoints, recordings and frames live, and the default database.
     pub data_dir: PathBuf,
+    /// The database's URL (`sqlite://PATH` or `postgres://...`); `None`: the SQLite file in the
+    /// data dir.
+    pub database: Option<String>,
     /// The researcher token.
     pub token: String,
     /// Serve the web UI from this folder; `None`: the copy inside the binary.
@@ -62,9 +65,13 @@ impl Server {
                 web.display()
             );
         }
-        let store = Store::open(&config.data_dir)
-            .await
-            .with_context(|| format!("opening the database in {}", config.data_dir.display()))?;
+        let store = match &config.database {
+            None => Store::open(&config.data_dir).await.with_context(|| {
+                format!("opening the database in {}", config.data_dir.display())
+            })?,
+            // The error names the database (without its password) and what went wrong.
+            Some(url) => Store::connect(url).await?,
+        };
         let hub = Hub::new(
             store.clone(),
             HubConfig {

@@ -150,3 +150,50 @@ fn bad_arguments_exit_non_zero_with_a_clear_message() {
     assert_rejected(&["sim"], "--task");
     assert_rejected(&["fly"], "unrecognized subcommand");
 }
+
+#[test]
+fn serve_names_what_is_wrong_with_its_database_and_never_its_password() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().to_str().unwrap();
+    // Nothing listens on a port that was free a moment ago: refused at once.
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let refused = format!("postgres://ann:secret@127.0.0.1:{port}/dualrep");
+    let cases = [
+        (
+            "mysql://ann:secret@localhost/x",
+            "names neither SQLite nor PostgreSQL".to_string(),
+        ),
+        (
+            "postgres://ann:secret@localhost:port/x",
+            "is not a valid PostgreSQL URL".into(),
+        ),
+        (
+            &refused,
+            format!("connecting to PostgreSQL at ann@127.0.0.1:{port}/dualrep"),
+        ),
+        (
+            "sqlite:///nonexistent-dir/dualrep.db",
+            "opening the SQLite database /nonexistent-dir/dualrep.db".into(),
+        ),
+    ];
+    for (url, expected) in cases {
+        let args = [
+            "serve",
+            "--addr",
+            "127.0.0.1:0",
+            "--token",
+            "t",
+            "--data-dir",
+            data,
+            "--database",
+            url,
+        ];
+        assert_rejected(&args, &expected);
+        let stderr = String::from_utf8_lossy(&dualrep(&args).stderr).into_owned();
+        assert!(!stderr.contains("secret"), "{url}: {stderr}");
+    }
+}

@@ -21,6 +21,7 @@ async fn serve_with_models(data: &Path, models: &Path) -> dualrep::cli::serve::R
     start(ServeArgs {
         addr: "127.0.0.1:0".parse().unwrap(),
         data_dir: data.to_path_buf(),
+        database: None,
         token: Some(TOKEN.into()),
         max_sessions: Some(2),
         web_dir: Some(root().join("web")),

@@ -4,8 +4,9 @@
 #   bash tests/run.sh [cargo test arguments...]
 #
 # Besides Rust, the tests drive Debian's Chromium from Node (tests/browser.rs), start a
-# single-node Slurm cluster (tests/slurm.rs) and read recordings back with Python's rerun-sdk in
-# a venv they create (tests/recording.rs). This installs only what is missing: Node.js may come
+# single-node Slurm cluster (tests/slurm.rs), run the store on a throwaway PostgreSQL cluster
+# (tests/store.rs; initdb from Debian's postgresql) and read recordings back with Python's
+# rerun-sdk in a venv they create (tests/recording.rs). This installs only what is missing: Node.js may come
 # from another source than Debian (its own `nodejs` package ships npm, and Debian's `npm`
 # conflicts with it), so Node and npm are installed only when Node is absent. Python packages go
 # into venvs, never into the system.
@@ -24,6 +25,8 @@ fi
 have slurmctld || missing+=(slurmctld)
 have slurmd || missing+=(slurmd)
 have sbatch || missing+=(slurm-client)
+# Debian keeps initdb and postgres off PATH, under /usr/lib/postgresql/<version>/bin.
+compgen -G '/usr/lib/postgresql/*/bin/initdb' >/dev/null || missing+=(postgresql)
 # `python3 -m venv` needs ensurepip, which Debian ships apart in python3-venv.
 python3 -c 'import ensurepip, venv' 2>/dev/null || missing+=(python3-venv)
 

@@ -1,15 +1,56 @@
-//! The store against a real SQLite database per test (`#[sqlx::test]` applies `migrations/`).
+//! The store against real databases: every test here runs twice, on SQLite (a file in a
+//! temporary data dir, as `dualrep serve` opens it) and on PostgreSQL (a fresh database on the
+//! tests' throwaway cluster, `support::postgres`), from the same body.
 
 use dualrep::guidance::drpl::trainer::Preference;
 use dualrep::guidance::evaluative_run::{AskedStep, EpisodeRecord};
 use dualrep::scene_graph::AbstractState;
 use dualrep::session::{AnswerValue, Answerer, QueryKind, StoredMoment};
 use dualrep::sim::Outcome;
-use dualrep::store::{CommitOutcome, NewSession, Status, Store, SyntheticAnswer};
-use sqlx::SqlitePool;
+use dualrep::store::{CommitOutcome, Db, NewSession, Status, Store, SyntheticAnswer};
 
-async fn store_with_session(pool: SqlitePool, id: &str) -> Store {
-    let store = Store::from_pool(pool).await.unwrap();
+/// Each test body, as `sqlite::<name>` and `postgres::<name>`.
+macro_rules! on_both {
+    ($($name:ident),* $(,)?) => {
+        mod sqlite {
+            $(
+                #[tokio::test]
+                async fn $name() {
+                    let dir = tempfile::tempdir().unwrap();
+                    super::$name(dualrep::store::Store::open(dir.path()).await.unwrap()).await;
+                }
+            )*
+        }
+        mod postgres {
+            $(
+                #[tokio::test]
+                async fn $name() {
+                    let Some(db) = crate::support::postgres::database().await else {
+                        return;
+                    };
+                    super::$name(dualrep::store::Store::connect(&db.url).await.unwrap()).await;
+                }
+            )*
+        }
+    };
+}
+
+on_both!(
+    the_first_committed_answer_wins_and_repeats_are_idempotent,
+    stored_moments_carry_each_querys_step_action_and_answer,
+    a_re_asked_query_keeps_its_id_and_replay_stops_at_the_first_gap,
+    synthetic_batches_store_queries_with_answers_once,
+    status_episodes_checkpoints_and_recovery,
+    an_undo_reopens_an_answer_and_the_resume_replays_it_where_it_was_applied,
+    asked_steps_come_back_bit_for_bit_with_their_moments,
+    synthetic_answers_store_their_steps_once,
+    a_stored_step_that_is_not_whole_f32s_is_an_error_that_names_its_column,
+    times_are_stored_alike_and_spans_computed_from_them,
+    trainers_votes_and_surveys_keep_their_order_and_replace_in_place,
+    a_study_numbers_its_participants_and_keeps_the_first_survey,
+);
+
+async fn store_with_session(store: Store, id: &str) -> Store {
     store
         .insert_session(NewSession {
             id,
@@ -26,9 +67,8 @@ async fn store_with_session(pool: SqlitePool, id: &str) -> Store {
     store
 }
 
-#[sqlx::test]
-async fn the_first_committed_answer_wins_and_repeats_are_idempotent(pool: SqlitePool) {
-    let store = store_with_session(pool, "s1").await;
+async fn the_first_committed_answer_wins_and_repeats_are_idempotent(store: Store) {
+    let store = store_with_session(store, "s1").await;
     let q = store
         .upsert_query("s1", 0, QueryKind::Evaluative, 17, 5, "{}", None)
         .await
@@ -73,9 +113,8 @@ async fn the_first_committed_answer_wins_and_repeats_are_idempotent(pool: Sqlite
 
 /// What a resumed remote session catches up on: each evaluative query's step, the action of
 /// its stored transition (none without one) and its answer, if any.
-#[sqlx::test]
-async fn stored_moments_carry_each_querys_step_action_and_answer(pool: SqlitePool) {
-    let store = store_with_session(pool, "s1").await;
+async fn stored_moments_carry_each_querys_step_action_and_answer(store: Store) {
+    let store = store_with_session(store, "s1").await;
     let data = r#"{"kind": "evaluative", "observation": [0.0], "action": [0.25, -0.830583],
                    "reward": 0.0, "next_observation": [0.0]}"#;
     let answered = store
@@ -118,9 +157,8 @@ async fn stored_moments_carry_each_querys_step_action_and_answer(pool: SqlitePoo
     );
 }
 
-#[sqlx::test]
-async fn a_re_asked_query_keeps_its_id_and_replay_stops_at_the_first_gap(pool: SqlitePool) {
-    let store = store_with_session(pool, "s1").await;
+async fn a_re_asked_query_keeps_its_id_and_replay_stops_at_the_first_gap(store: Store) {
+    let store = store_with_session(store, "s1").await;
     let a = store
         .upsert_query("s1", 0, QueryKind::Preference, 0, 0, "{}", None)
         .await
@@ -165,9 +203,8 @@ async fn a_re_asked_query_keeps_its_id_and_replay_stops_at_the_first_gap(pool: S
     );
 }
 
-#[sqlx::test]
-async fn synthetic_batches_store_queries_with_answers_once(pool: SqlitePool) {
-    let store = store_with_session(pool, "s1").await;
+async fn synthetic_batches_store_queries_with_answers_once(store: Store) {
+    let store = store_with_session(store, "s1").await;
     let batch: Vec<SyntheticAnswer> = (0..5)
         .map(|i| SyntheticAnswer {
             seq: i,
@@ -188,9 +225,8 @@ async fn synthetic_batches_store_queries_with_answers_once(pool: SqlitePool) {
     assert_eq!(store.replay_answers("s1").await.unwrap().len(), 5);
 }
 
-#[sqlx::test]
-async fn status_episodes_checkpoints_and_recovery(pool: SqlitePool) {
-    let store = store_with_session(pool, "s1").await;
+async fn status_episodes_checkpoints_and_recovery(store: Store) {
+    let store = store_with_session(store, "s1").await;
     store.set_status("s1", Status::Running, None).await.unwrap();
     let row = store.session("s1").await.unwrap().unwrap();
     assert_eq!(row.status, Status::Running);
@@ -236,13 +272,10 @@ async fn status_episodes_checkpoints_and_recovery(pool: SqlitePool) {
     assert!(row.reason.unwrap().contains("stopped"));
 }
 
-#[sqlx::test]
-async fn an_undo_reopens_an_answer_and_the_resume_replays_it_where_it_was_applied(
-    pool: SqlitePool,
-) {
+async fn an_undo_reopens_an_answer_and_the_resume_replays_it_where_it_was_applied(store: Store) {
     use dualrep::session::events::{Revision, StoredRevision};
     use dualrep::store::{ReanswerOutcome, UndoOutcome};
-    let store = store_with_session(pool, "s1").await;
+    let store = store_with_session(store, "s1").await;
     let (good, bad) = (AnswerValue::Evaluation(1), AnswerValue::Evaluation(-1));
     let q0 = store
         .upsert_query("s1", 0, QueryKind::Evaluative, 3, 1, "{}", None)
@@ -361,9 +394,8 @@ fn asked_step(mark: f32) -> AskedStep {
     }
 }
 
-#[sqlx::test]
-async fn asked_steps_come_back_bit_for_bit_with_their_moments(pool: SqlitePool) {
-    let store = store_with_session(pool, "s1").await;
+async fn asked_steps_come_back_bit_for_bit_with_their_moments(store: Store) {
+    let store = store_with_session(store, "s1").await;
     let data = r#"{"kind": "evaluative", "observation": [0.0], "action": [0.0, 0.0],
                    "reward": 0.0, "next_observation": [0.0]}"#;
     let q = store
@@ -418,9 +450,8 @@ async fn asked_steps_come_back_bit_for_bit_with_their_moments(pool: SqlitePool) 
     assert!(second.asked.as_ref().unwrap().terminated);
 }
 
-#[sqlx::test]
-async fn synthetic_answers_store_their_steps_once(pool: SqlitePool) {
-    let store = store_with_session(pool, "s1").await;
+async fn synthetic_answers_store_their_steps_once(store: Store) {
+    let store = store_with_session(store, "s1").await;
     let batch: Vec<SyntheticAnswer> = (0..3u64)
         .map(|i| SyntheticAnswer {
             seq: i,
@@ -440,16 +471,17 @@ async fn synthetic_answers_store_their_steps_once(pool: SqlitePool) {
         asked,
         vec![Some(asked_step(0.0)), None, Some(asked_step(2.0))]
     );
-    let rows: i64 = sqlx::query_scalar("SELECT COUNT(*) FROM query_transitions")
-        .fetch_one(store.pool())
-        .await
-        .unwrap();
+    let count = "SELECT COUNT(*) FROM query_transitions";
+    let rows: i64 = match store.db() {
+        Db::Sqlite { reader, .. } => sqlx::query_scalar(count).fetch_one(reader).await,
+        Db::Postgres(pool) => sqlx::query_scalar(count).fetch_one(pool).await,
+    }
+    .unwrap();
     assert_eq!(rows, 2);
 }
 
-#[sqlx::test]
-async fn a_stored_step_that_is_not_whole_f32s_is_an_error_that_names_its_column(pool: SqlitePool) {
-    let store = store_with_session(pool, "s1").await;
+async fn a_stored_step_that_is_not_whole_f32s_is_an_error_that_names_its_column(store: Store) {
+    let store = store_with_session(store, "s1").await;
     let q = store
         .upsert_query("s1", 0, QueryKind::Evaluative, 7, 5, "{}", None)
         .await
@@ -458,13 +490,247 @@ async fn a_stored_step_that_is_not_whole_f32s_is_an_error_that_names_its_column(
         .store_asked_step(q, "s1", &asked_step(0.5))
         .await
         .unwrap();
-    sqlx::query("UPDATE query_transitions SET next_observation = x'00010203ff'")
-        .execute(store.pool())
-        .await
-        .unwrap();
+    let corrupt = "UPDATE query_transitions SET next_observation = $1";
+    let five_bytes = vec![0u8, 1, 2, 3, 0xff];
+    match store.db() {
+        Db::Sqlite { writer, .. } => sqlx::query(corrupt)
+            .bind(five_bytes)
+            .execute(writer)
+            .await
+            .map(|_| ()),
+        Db::Postgres(pool) => sqlx::query(corrupt)
+            .bind(five_bytes)
+            .execute(pool)
+            .await
+            .map(|_| ()),
+    }
+    .unwrap();
     let err = store.stored_moments("s1").await.unwrap_err().to_string();
     assert!(
         err.contains("query_transitions.next_observation: 5 bytes"),
         "{err}"
     );
+}
+
+/// Times are the server's RFC 3339 text on either database, and the spans read from them.
+async fn times_are_stored_alike_and_spans_computed_from_them(store: Store) {
+    let store = store_with_session(store, "s1").await;
+    let row = store.session("s1").await.unwrap().unwrap();
+    let shape = |t: &str| {
+        t.len() == 24 && t.ends_with('Z') && t.as_bytes()[10] == b'T' && t.as_bytes()[19] == b'.'
+    };
+    assert!(shape(&row.created_at), "{}", row.created_at);
+    assert_eq!(
+        store.session_seconds("s1").await.unwrap(),
+        None,
+        "not started"
+    );
+    assert_eq!(
+        store.trainer_seconds("s1").await.unwrap(),
+        None,
+        "no answers"
+    );
+    store.set_status("s1", Status::Running, None).await.unwrap();
+    let q = store
+        .upsert_query("s1", 0, QueryKind::Evaluative, 1, 0, "{}", None)
+        .await
+        .unwrap();
+    tokio::time::sleep(std::time::Duration::from_millis(30)).await;
+    store
+        .commit_answer(
+            q,
+            "s1",
+            AnswerValue::Evaluation(1),
+            Answerer::Trainer,
+            None,
+            30,
+        )
+        .await
+        .unwrap();
+    store
+        .set_status("s1", Status::Finished, None)
+        .await
+        .unwrap();
+    let row = store.session("s1").await.unwrap().unwrap();
+    assert!(shape(row.started_at.as_deref().unwrap()) && shape(row.ended_at.as_deref().unwrap()));
+    let t = store.trainer_seconds("s1").await.unwrap().unwrap();
+    assert!((0.025..10.0).contains(&t), "{t}");
+    let run = store.session_seconds("s1").await.unwrap().unwrap();
+    assert!((0.025..10.0).contains(&run), "{run}");
+    let person = store.person_answers("s1").await.unwrap();
+    assert_eq!(person.len(), 1);
+    let span = person[0].answered_s - person[0].asked_s;
+    assert!((0.025..10.0).contains(&span), "{span}");
+    assert!(person[0].asked_s > 1.7e9, "seconds since the Unix epoch");
+}
+
+/// Trainers, their own answers in the order given, and the surveys and alignments that a
+/// second write replaces in place.
+async fn trainers_votes_and_surveys_keep_their_order_and_replace_in_place(store: Store) {
+    use dualrep::store::{AddTrainer, AlignmentRow, Survey, TrainerOrigin, VoteOutcome};
+    let store = store_with_session(store, "s1").await;
+    let mut ids = Vec::new();
+    for (name, token) in [("Zoe", "tz"), ("ada", "ta"), ("Émile", "te")] {
+        match store
+            .add_trainer("s1", name, token, TrainerOrigin::Joined)
+            .await
+            .unwrap()
+        {
+            AddTrainer::Added(t) => {
+                assert_eq!((t.name.as_str(), t.origin), (name, TrainerOrigin::Joined));
+                ids.push(t.id);
+            }
+            AddTrainer::NameTaken => panic!("{name} is new"),
+        }
+    }
+    assert!(matches!(
+        store
+            .add_trainer("s1", "ada", "other", TrainerOrigin::Invited)
+            .await
+            .unwrap(),
+        AddTrainer::NameTaken
+    ));
+    let names: Vec<String> = store
+        .trainers("s1")
+        .await
+        .unwrap()
+        .into_iter()
+        .map(|t| t.name)
+        .collect();
+    assert_eq!(names, ["Zoe", "ada", "Émile"]);
+    assert_eq!(
+        store.trainer_by_token("ta").await.unwrap().unwrap().id,
+        ids[1]
+    );
+    let q = store
+        .upsert_query("s1", 0, QueryKind::Preference, 0, 0, "{}", None)
+        .await
+        .unwrap();
+    // Given last-first: they come back in the order given, not by trainer.
+    let left = AnswerValue::Preference(Preference::Left);
+    let right = AnswerValue::Preference(Preference::Right);
+    for (id, v) in [(ids[2], left), (ids[0], right), (ids[1], left)] {
+        assert_eq!(
+            store.commit_vote(q, "s1", id, v, 40).await.unwrap(),
+            VoteOutcome::Committed
+        );
+    }
+    assert_eq!(
+        store.commit_vote(q, "s1", ids[0], left, 50).await.unwrap(),
+        VoteOutcome::AlreadyAnswered(right)
+    );
+    let votes: Vec<(i64, AnswerValue)> = store
+        .query_votes(q)
+        .await
+        .unwrap()
+        .into_iter()
+        .map(|(t, v)| (t.id, v))
+        .collect();
+    assert_eq!(votes, [(ids[2], left), (ids[0], right), (ids[1], left)]);
+    assert_eq!(store.person_answers("s1").await.unwrap().len(), 3);
+    let survey = |n| Survey {
+        overall_experience: n,
+        perceived_intelligence: 2,
+        cognitive_ease: 3,
+    };
+    store
+        .save_trainer_survey(ids[0], "s1", &survey(1))
+        .await
+        .unwrap();
+    store
+        .save_trainer_survey(ids[0], "s1", &survey(5))
+        .await
+        .unwrap();
+    assert_eq!(
+        store.trainer_surveys("s1").await.unwrap(),
+        [(ids[0], survey(5))]
+    );
+    store.save_survey("s1", &survey(2)).await.unwrap();
+    store.save_survey("s1", &survey(4)).await.unwrap();
+    assert_eq!(store.survey("s1").await.unwrap(), Some(survey(4)));
+    for alignment in [0.5, 0.75] {
+        let a = AlignmentRow {
+            queries: 1,
+            alignment,
+            alignment_of_mean: -0.25,
+        };
+        store.record_alignment("s1", a).await.unwrap();
+    }
+    let curve = store.alignment("s1").await.unwrap();
+    assert_eq!((curve.len(), curve[0].alignment), (1, 0.75));
+}
+
+/// Participants numbered in the order they came, a position's session linked once, and a
+/// survey's first answers kept (sorted by question in byte order on both databases).
+async fn a_study_numbers_its_participants_and_keeps_the_first_survey(store: Store) {
+    use dualrep::store::{StudySessionRow, SurveyOutcome};
+    let store = store_with_session(store, "s1").await;
+    let spec = serde_json::json!({"title": "t"});
+    let study = store.insert_study("st1", "t", &spec, "link").await.unwrap();
+    assert_eq!((study.spec, study.link_token.as_str()), (spec, "link"));
+    assert_eq!(
+        store.study_by_link("link").await.unwrap().unwrap().id,
+        "st1"
+    );
+    let order = |n: usize| vec![format!("c{n}")];
+    let first = store
+        .add_participant("st1", "p0", "tok0", order)
+        .await
+        .unwrap();
+    let second = store
+        .add_participant("st1", "p1", "tok1", order)
+        .await
+        .unwrap();
+    assert_eq!((first.number, second.number), (0, 1));
+    assert_eq!(second.ordering, ["c1"]);
+    store.consent("p0").await.unwrap();
+    let consented = store
+        .participant_by_token("tok0")
+        .await
+        .unwrap()
+        .unwrap()
+        .consented_at;
+    store.consent("p0").await.unwrap();
+    assert_eq!(
+        store
+            .participant_by_token("tok0")
+            .await
+            .unwrap()
+            .unwrap()
+            .consented_at,
+        consented,
+        "the first consent's time stays"
+    );
+    let link = StudySessionRow {
+        participant_id: "p0".into(),
+        position: 0,
+        condition: "c0".into(),
+        session_id: "s1".into(),
+    };
+    assert!(store.link_study_session(&link).await.unwrap());
+    assert!(!store.link_study_session(&link).await.unwrap());
+    assert_eq!(store.study_sessions("st1").await.unwrap(), [link]);
+    let answers: Vec<(String, i64)> = [("b", 2), ("B", 1), ("a_z", 3), ("az", 4)]
+        .map(|(q, v)| (q.to_string(), v))
+        .into();
+    assert_eq!(
+        store.save_study_survey("p0", 0, &answers).await.unwrap(),
+        SurveyOutcome::Stored
+    );
+    assert_eq!(
+        store
+            .save_study_survey("p0", 0, &answers[..1])
+            .await
+            .unwrap(),
+        SurveyOutcome::AlreadyAnswered
+    );
+    let questions: Vec<String> = store
+        .study_answers("st1")
+        .await
+        .unwrap()
+        .into_iter()
+        .map(|a| a.question)
+        .collect();
+    assert_eq!(questions, ["B", "a_z", "az", "b"]);
+    assert_eq!(store.answered_positions("p0").await.unwrap(), [0]);
 }

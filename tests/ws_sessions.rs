@@ -4,7 +4,8 @@
 use std::collections::{HashMap, HashSet};
 use std::time::Duration;
 
-use crate::support::server::{Api, serve};
+use crate::support::postgres;
+use crate::support::server::{Api, serve, serve_on};
 use crate::support::trainer::{Trainer, token_of};
 use serde_json::{Value, json};
 
@@ -62,8 +63,20 @@ async fn stored_answers(api: &Api, id: &str) -> HashMap<i64, Value> {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_human_dref_session_runs_to_its_end_with_every_answer_stored() {
+    human_dref_session_to_its_end(None).await;
+}
+
+/// The same on PostgreSQL (`--database postgres://...`): the whole server on it.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_human_dref_session_runs_to_its_end_on_postgresql() {
+    if let Some(db) = postgres::database().await {
+        human_dref_session_to_its_end(Some(&db.url)).await;
+    }
+}
+
+async fn human_dref_session_to_its_end(database: Option<&str>) {
     let dir = tempfile::tempdir().unwrap();
-    let server = serve(dir.path()).await;
+    let server = serve_on(dir.path(), database).await;
     let api = Api::new(server.addr);
     let (id, token) = launch(
         &api,

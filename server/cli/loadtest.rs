@@ -175,6 +175,7 @@ async fn loadtest(args: LoadtestArgs) -> anyhow::Result<()> {
             let running = start(ServeArgs {
                 addr: "127.0.0.1:0".parse()?,
                 data_dir: data_dir.path().to_path_buf(),
+                database: None,
                 token: Some(crate::hub::random_hex(16)),
                 max_sessions: Some(args.sessions),
                 web_dir: None,

@@ -18,9 +18,20 @@ pub struct ServeArgs {
     /// Address to listen on (port 0 picks a free one; the line "listening on" says which).
     #[arg(long, default_value = "127.0.0.1:8080")]
     pub addr: SocketAddr,
-    /// Where the database, checkpoints, recordings and the generated token live.
+    /// Where the database (unless --database), checkpoints, recordings and the generated token
+    /// live.
     #[arg(long, default_value = "./data")]
     pub data_dir: PathBuf,
+    /// The database: sqlite://PATH, or postgres://USER:PASSWORD@HOST:PORT/DATABASE (an existing
+    /// database; the schema is created at first start) [default: the SQLite file dualrep.db in
+    /// the data dir]. Checkpoints and recordings stay in the data dir either way.
+    #[arg(
+        long,
+        env = "DUALREP_DATABASE",
+        hide_env_values = true,
+        value_name = "URL"
+    )]
+    pub database: Option<String>,
     /// The researcher token [default: DUALREP_TOKEN, else `<data-dir>/token`, generated at first start].
     #[arg(long, env = "DUALREP_TOKEN", hide_env_values = true)]
     pub token: Option<String>,
@@ -139,10 +150,14 @@ impl Running {
 
 async fn serve(args: ServeArgs) -> anyhow::Result<()> {
     let data_dir = args.data_dir.clone();
+    let database = match &args.database {
+        Some(url) => format!(", database {}", crate::store::redacted(url)),
+        None => String::new(),
+    };
     let running = start(args).await?;
     // Tests and scripts read this line to find the port.
     println!(
-        "dualrep listening on http://{} (data in {}, {} session(s) at once)",
+        "dualrep listening on http://{} (data in {}{database}, {} session(s) at once)",
         running.addr,
         data_dir.display(),
         running.max_running
@@ -175,6 +190,7 @@ pub async fn start(args: ServeArgs) -> anyhow::Result<Running> {
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let server = Server::open(ServerConfig {
         data_dir: args.data_dir.clone(),
+        database: args.database.clone(),
         token: token.clone(),
         web_dir: args.web_dir.clone(),
         models_dir: args.models_dir.clone(),

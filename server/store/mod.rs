@@ -1,6 +1,29 @@
-//! The database: SQLite through sqlx, schema in `migrations/` (applied at open). One file per
-//! table family. WAL mode with `synchronous = FULL`, so a committed answer survives a killed
-//! process and a power cut alike; answers are acknowledged only after their commit.
+//! The database: embedded SQLite (the default, a file in the data dir) or PostgreSQL
+//! (`dualrep serve --database postgres://...`), through sqlx. One file per table family; the
+//! schema in `migrations/` (SQLite) and `migrations/postgres/` (the same migrations in
+//! PostgreSQL's types), applied at open. Answers are acknowledged only after their commit, and a
+//! commit is durable when it returns: SQLite runs in WAL mode with `synchronous = FULL` (a
+//! committed answer survives a killed process and a power cut alike); PostgreSQL keeps its
+//! default `synchronous_commit = on`.
+//!
+//! One SQL text serves both databases (see `backend` for why two native drivers rather than
+//! sqlx's `Any`). What both accept:
+//! - placeholders `$1`, `$2`, ...: PostgreSQL's own; sqlx's SQLite driver binds `$N` to the
+//!   N-th argument as well (`sqlx-sqlite/src/arguments.rs`);
+//! - times made in Rust and bound (`clock`), never the database's `strftime`/`now()`; spans
+//!   computed in Rust from the stored texts, never with `julianday`;
+//! - `INSERT ... ON CONFLICT ... DO NOTHING | DO UPDATE SET col = excluded.col` (never `INSERT OR
+//!   REPLACE`), `RETURNING`, `COUNT(*) FILTER (WHERE ...)` (never `SUM` of a comparison);
+//! - JSON columns are text, read in Rust (never `json_extract`);
+//! - a read-then-write transaction starts with the `UPDATE` that locks its row (PostgreSQL has
+//!   no single writer; SQLite's writer connection orders them anyway).
+//!
+//! The schemas differ only where the types must: `INTEGER PRIMARY KEY AUTOINCREMENT` is an
+//! identity column, `INTEGER` is `BIGINT` (what `i64` binds as), `REAL` is `DOUBLE PRECISION`,
+//! `BLOB` is `BYTEA`, a 0/1 flag is `BOOLEAN`, and the two tables the store reads in insertion
+//! order (SQLite's implicit `rowid`) have an explicit identity column of that name.
+//!
+//! Checkpoint files and recordings stay in the data dir on either database.
 //!
 //! - `sessions`: launch config, status, progress.
 //! - `queries`: what was asked (kind, step, abstract state, payload) and the answers given.
@@ -17,16 +40,49 @@
 //! - `studies`: studies, their participants, each participant's session per condition, and
 //!   their survey answers.
 
-/// The current time as the RFC 3339 text every table stores (UTC, milliseconds), as a literal
-/// for `concat!`: sqlx takes only static SQL.
-macro_rules! now {
-    () => {
-        "strftime('%Y-%m-%dT%H:%M:%fZ', 'now')"
+/// `$body` once per database of `$db` (a [`Db`]), with `$pool` the pool to read from
+/// (`reader`) or to write through (`writer`; PostgreSQL has one pool for both), and optionally
+/// `$t` the database's sqlx type (`|pool: DB|`, for `QueryBuilder::<DB>`): the same SQL text,
+/// bound and decoded by each driver's own types. `$body` may use `?` and `.await`; it is
+/// compiled twice, and both copies must give the same type.
+macro_rules! on_db {
+    ($db:expr, $role:ident, |$pool:ident| $body:expr) => {
+        on_db!($db, $role, |$pool: _Db| $body)
+    };
+    ($db:expr, reader, |$pool:ident: $t:ident| $body:expr) => {
+        match &$db {
+            $crate::store::Db::Sqlite { reader: $pool, .. } => {
+                #[allow(dead_code)]
+                type $t = sqlx::Sqlite;
+                $body
+            }
+            $crate::store::Db::Postgres($pool) => {
+                #[allow(dead_code)]
+                type $t = sqlx::Postgres;
+                $body
+            }
+        }
+    };
+    ($db:expr, writer, |$pool:ident: $t:ident| $body:expr) => {
+        match &$db {
+            $crate::store::Db::Sqlite { writer: $pool, .. } => {
+                #[allow(dead_code)]
+                type $t = sqlx::Sqlite;
+                $body
+            }
+            $crate::store::Db::Postgres($pool) => {
+                #[allow(dead_code)]
+                type $t = sqlx::Postgres;
+                $body
+            }
+        }
     };
 }
 
 mod alignments;
+mod backend;
 mod checkpoints;
+mod clock;
 mod columns;
 mod datasets;
 mod episodes;
@@ -39,13 +95,11 @@ mod trainers;
 mod transitions;
 
 use std::path::Path;
-use std::str::FromStr;
-use std::time::Duration;
 
-use sqlx::SqlitePool;
-use sqlx::sqlite::SqliteConnectOptions;
+use anyhow::Context;
 
 pub use alignments::AlignmentRow;
+pub use backend::{Db, redacted};
 pub use checkpoints::CheckpointRow;
 pub use datasets::DatasetRow;
 pub use episodes::EpisodeRow;
@@ -59,19 +113,16 @@ pub use trainers::{
     check_name,
 };
 
-/// The database file inside the data dir.
+/// The database file inside the data dir (the default database).
 pub const DB_FILE: &str = "dualrep.db";
 
 /// What a store call can fail with.
 pub type Result<T> = std::result::Result<T, sqlx::Error>;
 
+/// The store: cheap to clone (pools and a channel), and shared by every part of a server.
 #[derive(Clone, Debug)]
 pub struct Store {
-    /// Readers (WAL lets them run beside the writer).
-    pool: SqlitePool,
-    /// One connection for every write: writers queue here, in order, instead of contending for
-    /// SQLite's lock (whose busy handler sleeps in steps of milliseconds).
-    writer: SqlitePool,
+    db: Db,
     /// The answer writer's queue (`queries::group_commit`).
     committer: tokio::sync::mpsc::Sender<queries::CommitRequest>,
 }
@@ -80,62 +131,37 @@ impl Store {
     /// Open (creating on first run) `<data_dir>/dualrep.db` and apply the migrations.
     pub async fn open(data_dir: &Path) -> anyhow::Result<Self> {
         std::fs::create_dir_all(data_dir)?;
-        let options = SqliteConnectOptions::from_str("sqlite://")?
-            .filename(data_dir.join(DB_FILE))
-            .create_if_missing(true)
-            .journal_mode(sqlx::sqlite::SqliteJournalMode::Wal)
-            .synchronous(sqlx::sqlite::SqliteSynchronous::Full)
-            .foreign_keys(true)
-            .busy_timeout(Duration::from_secs(10));
-        let writer = sqlx::sqlite::SqlitePoolOptions::new()
-            .max_connections(1)
-            .connect_with(options.clone())
-            .await?;
-        let pool = sqlx::sqlite::SqlitePoolOptions::new()
-            .max_connections(8)
-            .connect_with(options)
-            .await?;
-        let store = Self::assemble(pool, writer);
-        store.migrate().await?;
-        Ok(store)
+        Self::assemble(Db::sqlite_file(&data_dir.join(DB_FILE)).await?).await
     }
 
-    /// A store over an existing pool (`#[sqlx::test]` hands one in); migrations applied.
-    pub async fn from_pool(pool: SqlitePool) -> anyhow::Result<Self> {
-        let store = Self::assemble(pool.clone(), pool);
-        store.migrate().await?;
-        Ok(store)
+    /// Open the database at `url` (`sqlite://PATH`, created on first use, or
+    /// `postgres://USER:PASSWORD@HOST:PORT/DATABASE`, which must exist) and apply the
+    /// migrations. Errors name the database without its password.
+    pub async fn connect(url: &str) -> anyhow::Result<Self> {
+        Self::assemble(Db::connect(url).await?).await
     }
 
-    /// The store over its pools, with its answer writer running on the current runtime.
-    fn assemble(pool: SqlitePool, writer: SqlitePool) -> Self {
+    /// The store over its database, migrated, with its answer writer running on the current
+    /// runtime.
+    async fn assemble(db: Db) -> anyhow::Result<Self> {
+        db.migrate()
+            .await
+            .with_context(|| format!("applying the {} migrations", db.name()))?;
         let (committer, requests) = tokio::sync::mpsc::channel(4096);
-        tokio::spawn(queries::group_commit(writer.clone(), requests));
-        Self {
-            pool,
-            writer,
-            committer,
-        }
+        tokio::spawn(queries::group_commit(db.clone(), requests));
+        Ok(Self { db, committer })
     }
 
-    async fn migrate(&self) -> anyhow::Result<()> {
-        sqlx::migrate!("./migrations").run(&self.writer).await?;
-        Ok(())
-    }
-
-    pub fn pool(&self) -> &SqlitePool {
-        &self.pool
-    }
-
-    fn writer(&self) -> &SqlitePool {
-        &self.writer
+    /// The pools (tests and tools that run their own SQL).
+    pub fn db(&self) -> &Db {
+        &self.db
     }
 
     /// Whether the database answers (for `/healthz`).
     pub async fn ping(&self) -> Result<()> {
-        sqlx::query("SELECT 1")
-            .execute(&self.pool)
+        on_db!(self.db, reader, |pool| sqlx::query("SELECT 1")
+            .execute(pool)
             .await
-            .map(|_| ())
+            .map(|_| ()))
     }
 }

@@ -2,11 +2,13 @@
 //! The first committed answer wins (`answers.query_id` is the primary key); a repeat of the same
 //! value is idempotent.
 
-use serde::Serialize;
-use sqlx::Row;
+use std::collections::{HashMap, HashSet};
 
+use serde::Serialize;
+
+use super::backend::StoreRow;
 use super::transitions::insert_asked_step;
-use super::{Result, Store};
+use super::{Db, Result, Store, clock};
 use crate::guidance::evaluative_run::AskedStep;
 use crate::session::{AnswerValue, Answerer, QueryKind};
 
@@ -78,12 +80,13 @@ impl Store {
     /// How many query numbers a session has used (its highest `seq` + 1): a session on a
     /// remote env numbers new queries after all of them.
     pub async fn query_count(&self, session_id: &str) -> Result<u64> {
-        let row =
-            sqlx::query("SELECT COALESCE(MAX(seq) + 1, 0) AS n FROM queries WHERE session_id = ?")
-                .bind(session_id)
-                .fetch_one(self.pool())
-                .await?;
-        Ok(row.get::<i64, _>("n") as u64)
+        let n: i64 = on_db!(self.db, reader, |pool| sqlx::query_scalar(
+            "SELECT COALESCE(MAX(seq) + 1, 0) FROM queries WHERE session_id = $1"
+        )
+        .bind(session_id)
+        .fetch_one(pool)
+        .await?);
+        Ok(n as u64)
     }
 
     /// Store a query (or find it again: a resumed session re-asks an unanswered query with the
@@ -99,13 +102,15 @@ impl Store {
         payload: &str,
         data: Option<&str>,
     ) -> Result<i64> {
-        let row =
-            sqlx::query(concat!(
-            "INSERT INTO queries (session_id, seq, kind, step, abstract_state, payload, data, asked_at)
-             VALUES (?, ?, ?, ?, ?, ?, ?, ", now!(), ")
-             ON CONFLICT (session_id, seq) DO UPDATE SET asked_at = excluded.asked_at
-             RETURNING id"
-        ))
+        let now = clock::now();
+        Ok(on_db!(self.db, writer, |pool| {
+            sqlx::query_scalar(
+                "INSERT INTO queries
+                   (session_id, seq, kind, step, abstract_state, payload, data, asked_at)
+                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8)
+                 ON CONFLICT (session_id, seq) DO UPDATE SET asked_at = excluded.asked_at
+                 RETURNING id",
+            )
             .bind(session_id)
             .bind(seq as i64)
             .bind(kind)
@@ -113,22 +118,23 @@ impl Store {
             .bind(i64::from(abstract_state))
             .bind(payload)
             .bind(data)
-            .fetch_one(self.writer())
-            .await?;
-        Ok(row.get("id"))
+            .bind(&now)
+            .fetch_one(pool)
+            .await?
+        }))
     }
 
     /// A session's query by its number (its id on the wire).
     pub async fn query_by_number(&self, session_id: &str, seq: u64) -> Result<Option<QueryRow>> {
-        let row = sqlx::query(
+        on_db!(self.db, reader, |pool| Ok(sqlx::query(
             "SELECT id, session_id, seq, kind, step, abstract_state, asked_at FROM queries
-             WHERE session_id = ? AND seq = ?",
+             WHERE session_id = $1 AND seq = $2",
         )
         .bind(session_id)
         .bind(seq as i64)
-        .fetch_optional(self.pool())
-        .await?;
-        Ok(row.map(|r| QueryRow {
+        .fetch_optional(pool)
+        .await?
+        .map(|r| QueryRow {
             id: r.get("id"),
             session_id: r.get("session_id"),
             seq: r.get("seq"),
@@ -136,7 +142,7 @@ impl Store {
             step: r.get("step"),
             abstract_state: r.get("abstract_state"),
             asked_at: r.get("asked_at"),
-        }))
+        })))
     }
 
     /// Commit an answer (by a named trainer: `trainer`); returns only after the transaction is
@@ -169,11 +175,13 @@ impl Store {
 
     /// The stored answer to a query, if any.
     pub async fn answer_value(&self, query_id: i64) -> Result<Option<AnswerValue>> {
-        let row = sqlx::query("SELECT value FROM answers WHERE query_id = ?")
-            .bind(query_id)
-            .fetch_optional(self.pool())
-            .await?;
-        Ok(row.map(|r| parse_value(r.get("value"))))
+        let value: Option<String> = on_db!(self.db, reader, |pool| sqlx::query_scalar(
+            "SELECT value FROM answers WHERE query_id = $1"
+        )
+        .bind(query_id)
+        .fetch_optional(pool)
+        .await?);
+        Ok(value.as_deref().map(parse_value))
     }
 
     /// A synthetic trainer's queries and answers in one transaction (a resumed synthetic
@@ -183,57 +191,63 @@ impl Store {
         session_id: &str,
         batch: &[SyntheticAnswer],
     ) -> Result<()> {
-        let mut tx = self.writer().begin().await?;
-        for a in batch {
-            let id: Option<i64> = sqlx::query(concat!(
-                "INSERT INTO queries (session_id, seq, kind, step, abstract_state, payload, data, asked_at)
-                 VALUES (?, ?, ?, ?, ?, '{}', ?, ", now!(), ") ON CONFLICT (session_id, seq) DO NOTHING RETURNING id"
-            ))
-            .bind(session_id)
-            .bind(a.seq as i64)
-            .bind(a.kind)
-            .bind(a.step as i64)
-            .bind(i64::from(a.abstract_state))
-            .bind(a.data.as_deref())
-            .fetch_optional(&mut *tx)
-            .await?
-            .map(|r| r.get("id"));
-            if let Some(id) = id {
-                sqlx::query(concat!(
-                    "INSERT INTO answers (query_id, session_id, value, who, latency_ms, answered_at)
-                     VALUES (?, ?, ?, 'synthetic', 0, ", now!(), ")"
-                ))
-                .bind(id)
+        let now = clock::now();
+        on_db!(self.db, writer, |pool| {
+            let mut tx = pool.begin().await?;
+            for a in batch {
+                let id: Option<i64> = sqlx::query_scalar(
+                    "INSERT INTO queries (session_id, seq, kind, step, abstract_state, payload, data, asked_at)
+                     VALUES ($1, $2, $3, $4, $5, '{}', $6, $7)
+                     ON CONFLICT (session_id, seq) DO NOTHING RETURNING id",
+                )
                 .bind(session_id)
-                .bind(value_json(a.value))
-                .execute(&mut *tx)
+                .bind(a.seq as i64)
+                .bind(a.kind)
+                .bind(a.step as i64)
+                .bind(i64::from(a.abstract_state))
+                .bind(a.data.as_deref())
+                .bind(&now)
+                .fetch_optional(&mut *tx)
                 .await?;
-                if let Some(step) = &a.asked {
-                    insert_asked_step(&mut *tx, id, session_id, step).await?;
+                if let Some(id) = id {
+                    sqlx::query(
+                        "INSERT INTO answers (query_id, session_id, value, who, latency_ms, answered_at)
+                         VALUES ($1, $2, $3, 'synthetic', 0, $4)",
+                    )
+                    .bind(id)
+                    .bind(session_id)
+                    .bind(value_json(a.value))
+                    .bind(&now)
+                    .execute(&mut *tx)
+                    .await?;
+                    if let Some(step) = &a.asked {
+                        insert_asked_step(&mut *tx, id, session_id, step).await?;
+                    }
                 }
             }
-        }
-        tx.commit().await
+            tx.commit().await
+        })
     }
 
     /// The answers a resumed session replays: by query order, up to the first query without
     /// one; an answer changed by an undo as first given (the change is replayed where it was
     /// applied, see `replay_revisions`).
     pub async fn replay_answers(&self, session_id: &str) -> Result<Vec<AnswerValue>> {
-        let rows = sqlx::query(
+        let rows: Vec<(i64, Option<String>)> = on_db!(self.db, reader, |pool| sqlx::query(
             "SELECT q.seq,
                     COALESCE((SELECT r.value FROM answer_revisions r
                               WHERE r.query_id = q.id AND r.revision = 0), a.value) AS value
              FROM queries q LEFT JOIN answers a ON a.query_id = q.id
-             WHERE q.session_id = ? ORDER BY q.seq",
+             WHERE q.session_id = $1 ORDER BY q.seq",
         )
         .bind(session_id)
-        .fetch_all(self.pool())
-        .await?;
+        .fetch_all(pool)
+        .await?
+        .iter()
+        .map(|r| (r.get("seq"), r.get("value")))
+        .collect());
         let mut out = Vec::new();
-        for (i, r) in rows.iter().enumerate() {
-            let seq: i64 = r.get("seq");
-            let value: Option<String> = r.get("value");
+        for (i, (seq, value)) in rows.into_iter().enumerate() {
             match value {
                 Some(v) if seq == i as i64 => out.push(parse_value(&v)),
                 _ => break,
@@ -244,53 +258,54 @@ impl Store {
 
     /// Every answered query of a session, in the order asked.
     pub async fn answers(&self, session_id: &str) -> Result<Vec<AnswerRow>> {
-        let rows = sqlx::query(
+        on_db!(self.db, reader, |pool| Ok(sqlx::query(
             "SELECT q.seq, q.kind, q.step, q.abstract_state, q.asked_at,
                     a.value, a.who, a.answered_at, a.latency_ms, a.revision, a.trainer_id, t.name
              FROM answers a JOIN queries q ON q.id = a.query_id
              LEFT JOIN trainers t ON t.id = a.trainer_id
-             WHERE a.session_id = ? ORDER BY q.seq",
+             WHERE a.session_id = $1 ORDER BY q.seq",
         )
         .bind(session_id)
-        .fetch_all(self.pool())
-        .await?;
-        Ok(rows
-            .iter()
-            .map(|r| AnswerRow {
-                query_id: r.get("seq"),
-                kind: r.get("kind"),
-                step: r.get("step"),
-                abstract_state: r.get("abstract_state"),
-                value: parse_value(r.get("value")),
-                who: r.get("who"),
-                trainer: r.get("name"),
-                trainer_id: r.get("trainer_id"),
-                asked_at: r.get("asked_at"),
-                answered_at: r.get("answered_at"),
-                latency_ms: r.get("latency_ms"),
-                revision: r.get("revision"),
-            })
-            .collect())
+        .fetch_all(pool)
+        .await?
+        .iter()
+        .map(|r| AnswerRow {
+            query_id: r.get("seq"),
+            kind: r.get("kind"),
+            step: r.get("step"),
+            abstract_state: r.get("abstract_state"),
+            value: parse_value(&r.get::<String>("value")),
+            who: r.get("who"),
+            trainer: r.get("name"),
+            trainer_id: r.get("trainer_id"),
+            asked_at: r.get("asked_at"),
+            answered_at: r.get("answered_at"),
+            latency_ms: r.get("latency_ms"),
+            revision: r.get("revision"),
+        })
+        .collect()))
     }
 
     /// Answers per source (`trainer`, `trainers`, `synthetic`, `timeout`) and how many were "no feedback"
     /// (value 0) or skips, for the session's summary.
     pub async fn answer_counts(&self, session_id: &str) -> Result<AnswerCounts> {
-        let r = sqlx::query(
-            "SELECT COUNT(*) AS total,
-                    COALESCE(SUM(who IN ('trainer', 'trainers')), 0) AS by_trainer,
-                    COALESCE(SUM(who = 'timeout'), 0) AS timeouts,
-                    COALESCE(SUM(value IN ('0', '\"skip\"')), 0) AS no_feedback
-             FROM answers WHERE session_id = ?",
-        )
-        .bind(session_id)
-        .fetch_one(self.pool())
-        .await?;
-        Ok(AnswerCounts {
-            total: r.get("total"),
-            by_trainer: r.get("by_trainer"),
-            timeouts: r.get("timeouts"),
-            no_feedback: r.get("no_feedback"),
+        on_db!(self.db, reader, |pool| {
+            let r = sqlx::query(
+                "SELECT COUNT(*) AS total,
+                        COUNT(*) FILTER (WHERE who IN ('trainer', 'trainers')) AS by_trainer,
+                        COUNT(*) FILTER (WHERE who = 'timeout') AS timeouts,
+                        COUNT(*) FILTER (WHERE value IN ('0', '\"skip\"')) AS no_feedback
+                 FROM answers WHERE session_id = $1",
+            )
+            .bind(session_id)
+            .fetch_one(pool)
+            .await?;
+            Ok(AnswerCounts {
+                total: r.get("total"),
+                by_trainer: r.get("by_trainer"),
+                timeouts: r.get("timeouts"),
+                no_feedback: r.get("no_feedback"),
+            })
         })
     }
 }
@@ -309,15 +324,18 @@ impl Store {
     /// Seconds from the first query a person was asked to the last answer (the paper's T), for
     /// sessions with human answers.
     pub async fn trainer_seconds(&self, session_id: &str) -> Result<Option<f64>> {
-        let r = sqlx::query(
-            "SELECT (julianday(MAX(a.answered_at)) - julianday(MIN(q.asked_at))) * 86400.0 AS seconds
-             FROM answers a JOIN queries q ON q.id = a.query_id
-             WHERE a.session_id = ? AND a.who IN ('trainer', 'trainers', 'timeout')",
-        )
-        .bind(session_id)
-        .fetch_one(self.pool())
-        .await?;
-        Ok(r.get("seconds"))
+        let (first, last): (Option<String>, Option<String>) = on_db!(self.db, reader, |pool| {
+            let r = sqlx::query(
+                "SELECT MIN(q.asked_at) AS first, MAX(a.answered_at) AS last
+                 FROM answers a JOIN queries q ON q.id = a.query_id
+                 WHERE a.session_id = $1 AND a.who IN ('trainer', 'trainers', 'timeout')",
+            )
+            .bind(session_id)
+            .fetch_one(pool)
+            .await?;
+            (r.get("first"), r.get("last"))
+        });
+        Ok(clock::span(first.as_deref(), last.as_deref()))
     }
 }
 
@@ -338,10 +356,7 @@ const GROUP_COMMIT_MAX: usize = 256;
 /// The answer writer: takes every request that queued while the previous transaction was
 /// committing and commits them together, so that a burst of answers (many sessions asking at
 /// once) costs one fsync instead of one each. Each caller learns its own outcome.
-pub(super) async fn group_commit(
-    writer: sqlx::SqlitePool,
-    mut rx: tokio::sync::mpsc::Receiver<CommitRequest>,
-) {
+pub(super) async fn group_commit(db: Db, mut rx: tokio::sync::mpsc::Receiver<CommitRequest>) {
     while let Some(first) = rx.recv().await {
         let mut batch = vec![first];
         while batch.len() < GROUP_COMMIT_MAX {
@@ -350,7 +365,7 @@ pub(super) async fn group_commit(
                 Err(_) => break,
             }
         }
-        match commit_batch(&writer, &batch).await {
+        match commit_batch(&db, &batch).await {
             Ok(outcomes) => {
                 for (r, o) in batch.into_iter().zip(outcomes) {
                     let _ = r.reply.send(Ok(o));
@@ -369,51 +384,55 @@ pub(super) async fn group_commit(
 
 /// One multi-row statement (one implicit transaction, one fsync) for the whole batch; rows that
 /// hit an existing answer come back with that answer.
-async fn commit_batch(
-    writer: &sqlx::SqlitePool,
-    batch: &[CommitRequest],
-) -> Result<Vec<CommitOutcome>> {
-    let mut insert = sqlx::QueryBuilder::<sqlx::Sqlite>::new(
-        "INSERT INTO answers (query_id, session_id, value, who, trainer_id, latency_ms, answered_at) ",
-    );
-    insert.push_values(batch, |mut row, r| {
-        row.push_bind(r.query_id)
-            .push_bind(r.session_id.clone())
-            .push_bind(value_json(r.value))
-            .push_bind(r.who)
-            .push_bind(r.trainer)
-            .push_bind(r.latency_ms as i64)
-            .push(now!());
-    });
-    insert.push(" ON CONFLICT (query_id) DO NOTHING RETURNING query_id");
-    let inserted: std::collections::HashSet<i64> = insert
-        .build()
-        .fetch_all(writer)
-        .await?
-        .iter()
-        .map(|r| r.get("query_id"))
-        .collect();
-    let mut existing = std::collections::HashMap::new();
-    let conflicts: Vec<i64> = batch
-        .iter()
-        .map(|r| r.query_id)
-        .filter(|q| !inserted.contains(q))
-        .collect();
-    if !conflicts.is_empty() {
-        let mut select = sqlx::QueryBuilder::<sqlx::Sqlite>::new(
-            "SELECT query_id, value FROM answers WHERE query_id IN (",
+async fn commit_batch(db: &Db, batch: &[CommitRequest]) -> Result<Vec<CommitOutcome>> {
+    let now = clock::now();
+    let (inserted, existing) = on_db!(*db, writer, |writer: DB| {
+        let mut insert = sqlx::QueryBuilder::<DB>::new(
+            "INSERT INTO answers (query_id, session_id, value, who, trainer_id, latency_ms, answered_at) ",
         );
-        let mut ids = select.separated(", ");
-        for q in &conflicts {
-            ids.push_bind(*q);
+        insert.push_values(batch, |mut row, r| {
+            row.push_bind(r.query_id)
+                .push_bind(r.session_id.clone())
+                .push_bind(value_json(r.value))
+                .push_bind(r.who)
+                .push_bind(r.trainer)
+                .push_bind(r.latency_ms as i64)
+                .push_bind(now.clone());
+        });
+        insert.push(" ON CONFLICT (query_id) DO NOTHING RETURNING query_id");
+        let inserted: HashSet<i64> = insert
+            .build()
+            .fetch_all(writer)
+            .await?
+            .iter()
+            .map(|r| r.get("query_id"))
+            .collect();
+        let conflicts: Vec<i64> = batch
+            .iter()
+            .map(|r| r.query_id)
+            .filter(|q| !inserted.contains(q))
+            .collect();
+        let mut existing = HashMap::new();
+        if !conflicts.is_empty() {
+            let mut select = sqlx::QueryBuilder::<DB>::new(
+                "SELECT query_id, value FROM answers WHERE query_id IN (",
+            );
+            let mut ids = select.separated(", ");
+            for q in &conflicts {
+                ids.push_bind(*q);
+            }
+            select.push(")");
+            for r in select.build().fetch_all(writer).await? {
+                existing.insert(
+                    r.get::<i64>("query_id"),
+                    parse_value(&r.get::<String>("value")),
+                );
+            }
         }
-        select.push(")");
-        for r in select.build().fetch_all(writer).await? {
-            existing.insert(r.get::<i64, _>("query_id"), parse_value(r.get("value")));
-        }
-    }
+        (inserted, existing)
+    });
     // Within a batch, the first request for a query is the one that was inserted.
-    let mut claimed = std::collections::HashSet::new();
+    let mut claimed = HashSet::new();
     Ok(batch
         .iter()
         .map(|r| {

@@ -1,10 +1,9 @@
 //! The `sessions` table.
 
 use serde::Serialize;
-use sqlx::Row;
-use sqlx::sqlite::SqliteRow;
 
-use super::{Result, Store};
+use super::backend::StoreRow;
+use super::{Result, Store, clock};
 
 /// A session's lifecycle state (`status` in the API and the table).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, utoipa::ToSchema)]
@@ -110,7 +109,7 @@ impl SessionRow {
         })
     }
 
-    fn from_row(r: &SqliteRow) -> Self {
+    fn from_row(r: &impl StoreRow) -> Self {
         let status: String = r.get("status");
         Self {
             id: r.get("id"),
@@ -119,12 +118,12 @@ impl SessionRow {
             trainer: r.get("trainer"),
             seed: r.get("seed"),
             budget: r.get("budget"),
-            config: json(r.get("config")),
+            config: json(&r.get::<String>("config")),
             trainer_token: r.get("trainer_token"),
             status: Status::parse(&status).unwrap_or(Status::Failed),
             reason: r.get("reason"),
             progress: r.get("progress"),
-            latest: json(r.get("latest")),
+            latest: json(&r.get::<String>("latest")),
             created_at: r.get("created_at"),
             started_at: r.get("started_at"),
             ended_at: r.get("ended_at"),
@@ -146,63 +145,72 @@ pub struct NewSession<'a> {
 
 impl Store {
     pub async fn insert_session(&self, s: NewSession<'_>) -> Result<SessionRow> {
-        sqlx::query(concat!(
-            "INSERT INTO sessions (id, task, method, trainer, seed, budget, config, trainer_token, status, created_at)
-             VALUES (?, ?, ?, ?, ?, ?, ?, ?, 'queued', ", now!(), ")"
-        ))
-        .bind(s.id)
-        .bind(s.task)
-        .bind(s.method)
-        .bind(s.trainer)
-        .bind(s.seed as i64)
-        .bind(s.budget as i64)
-        .bind(s.config.to_string())
-        .bind(s.trainer_token)
-        .execute(self.writer())
-        .await?;
+        let now = clock::now();
+        on_db!(self.db, writer, |pool| {
+            sqlx::query(
+                "INSERT INTO sessions (id, task, method, trainer, seed, budget, config, trainer_token, status, created_at)
+                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8, 'queued', $9)",
+            )
+            .bind(s.id)
+            .bind(s.task)
+            .bind(s.method)
+            .bind(s.trainer)
+            .bind(s.seed as i64)
+            .bind(s.budget as i64)
+            .bind(s.config.to_string())
+            .bind(s.trainer_token)
+            .bind(&now)
+            .execute(pool)
+            .await?;
+        });
         self.session(s.id).await?.ok_or(sqlx::Error::RowNotFound)
     }
 
     pub async fn session(&self, id: &str) -> Result<Option<SessionRow>> {
-        let row = sqlx::query("SELECT * FROM sessions WHERE id = ?")
-            .bind(id)
-            .fetch_optional(self.pool())
-            .await?;
-        Ok(row.as_ref().map(SessionRow::from_row))
+        on_db!(self.db, reader, |pool| Ok(sqlx::query(
+            "SELECT * FROM sessions WHERE id = $1"
+        )
+        .bind(id)
+        .fetch_optional(pool)
+        .await?
+        .as_ref()
+        .map(SessionRow::from_row)))
     }
 
     /// All sessions, newest first.
     pub async fn sessions(&self) -> Result<Vec<SessionRow>> {
-        let rows = sqlx::query("SELECT * FROM sessions ORDER BY created_at DESC, id")
-            .fetch_all(self.pool())
-            .await?;
-        Ok(rows.iter().map(SessionRow::from_row).collect())
+        on_db!(self.db, reader, |pool| Ok(sqlx::query(
+            "SELECT * FROM sessions ORDER BY created_at DESC, id"
+        )
+        .fetch_all(pool)
+        .await?
+        .iter()
+        .map(SessionRow::from_row)
+        .collect()))
     }
 
     /// Set the status (and the reason for `failed`); terminal states stamp `ended_at`, a start
     /// stamps `started_at` once.
     pub async fn set_status(&self, id: &str, status: Status, reason: Option<&str>) -> Result<()> {
         let sql = match status {
-            Status::Running => concat!(
-                "UPDATE sessions SET status = ?, reason = ?, started_at = COALESCE(started_at, ",
-                now!(),
-                "), ended_at = NULL WHERE id = ?"
-            ),
-            Status::Queued | Status::Waiting => {
-                "UPDATE sessions SET status = ?, reason = ? WHERE id = ?"
+            Status::Running => {
+                "UPDATE sessions SET status = $1, reason = $2, started_at = COALESCE(started_at, $4),
+                 ended_at = NULL WHERE id = $3"
             }
-            _ => concat!(
-                "UPDATE sessions SET status = ?, reason = ?, ended_at = ",
-                now!(),
-                " WHERE id = ?"
-            ),
+            Status::Queued | Status::Waiting => {
+                "UPDATE sessions SET status = $1, reason = $2 WHERE id = $3"
+            }
+            _ => "UPDATE sessions SET status = $1, reason = $2, ended_at = $4 WHERE id = $3",
         };
-        sqlx::query(sql)
-            .bind(status)
-            .bind(reason)
-            .bind(id)
-            .execute(self.pool())
-            .await?;
+        // PostgreSQL takes exactly as many arguments as the statement has placeholders.
+        let stamp = (!matches!(status, Status::Queued | Status::Waiting)).then(clock::now);
+        on_db!(self.db, reader, |pool| {
+            let mut query = sqlx::query(sql).bind(status).bind(reason).bind(id);
+            if let Some(now) = &stamp {
+                query = query.bind(now);
+            }
+            query.execute(pool).await?;
+        });
         Ok(())
     }
 
@@ -212,34 +220,40 @@ impl Store {
         progress: u64,
         latest: &serde_json::Value,
     ) -> Result<()> {
-        sqlx::query("UPDATE sessions SET progress = ?, latest = ? WHERE id = ?")
-            .bind(progress as i64)
-            .bind(latest.to_string())
-            .bind(id)
-            .execute(self.writer())
-            .await?;
+        on_db!(self.db, writer, |pool| {
+            sqlx::query("UPDATE sessions SET progress = $1, latest = $2 WHERE id = $3")
+                .bind(progress as i64)
+                .bind(latest.to_string())
+                .bind(id)
+                .execute(pool)
+                .await?;
+        });
         Ok(())
     }
 
     /// At start: sessions that were running when the server went away become `interrupted`
     /// (resumable); queued ones stay queued and are started again. Returns both lists.
     pub async fn recover_after_restart(&self) -> Result<(Vec<String>, Vec<String>)> {
-        let interrupted: Vec<String> = sqlx::query(
-            "UPDATE sessions SET status = 'interrupted', reason = 'the server stopped while it ran'
-             WHERE status IN ('running', 'waiting') RETURNING id",
+        let interrupted: Vec<String> = on_db!(self.db, writer, |pool| {
+            sqlx::query(
+                "UPDATE sessions SET status = 'interrupted',
+                   reason = 'the server stopped while it ran'
+                 WHERE status IN ('running', 'waiting') RETURNING id",
+            )
+            .fetch_all(pool)
+            .await?
+            .iter()
+            .map(|r| r.get("id"))
+            .collect()
+        });
+        let queued = on_db!(self.db, reader, |pool| sqlx::query(
+            "SELECT id FROM sessions WHERE status = 'queued' ORDER BY created_at"
         )
-        .fetch_all(self.writer())
+        .fetch_all(pool)
         .await?
         .iter()
         .map(|r| r.get("id"))
-        .collect();
-        let queued =
-            sqlx::query("SELECT id FROM sessions WHERE status = 'queued' ORDER BY created_at")
-                .fetch_all(self.pool())
-                .await?
-                .iter()
-                .map(|r| r.get("id"))
-                .collect();
+        .collect());
         Ok((interrupted, queued))
     }
 }

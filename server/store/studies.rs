@@ -2,10 +2,8 @@
 //! survey answers (`migrations/0006_studies.sql`). What a participant is to do next is derived
 //! from these rows by [`crate::study::progress`]; nothing here decides it.
 
-use sqlx::Row;
-use sqlx::sqlite::SqliteRow;
-
-use super::{Result, Store};
+use super::backend::StoreRow;
+use super::{Result, Store, clock};
 
 /// One row of `studies`.
 #[derive(Clone, Debug)]
@@ -18,7 +16,7 @@ pub struct StudyRow {
 }
 
 impl StudyRow {
-    fn from_row(r: &SqliteRow) -> Self {
+    fn from_row(r: &impl StoreRow) -> Self {
         let spec: String = r.get("spec");
         Self {
             id: r.get("id"),
@@ -44,7 +42,7 @@ pub struct ParticipantRow {
 }
 
 impl ParticipantRow {
-    fn from_row(r: &SqliteRow) -> Self {
+    fn from_row(r: &impl StoreRow) -> Self {
         let ordering: String = r.get("ordering");
         Self {
             id: r.get("id"),
@@ -93,47 +91,60 @@ impl Store {
         spec: &serde_json::Value,
         link_token: &str,
     ) -> Result<StudyRow> {
-        let row = sqlx::query(concat!(
-            "INSERT INTO studies (id, title, spec, link_token, created_at) VALUES (?, ?, ?, ?, ",
-            now!(),
-            ") RETURNING *"
-        ))
-        .bind(id)
-        .bind(title)
-        .bind(spec.to_string())
-        .bind(link_token)
-        .fetch_one(self.writer())
-        .await?;
-        Ok(StudyRow::from_row(&row))
+        let now = clock::now();
+        on_db!(self.db, writer, |pool| Ok(StudyRow::from_row(
+            &sqlx::query(
+                "INSERT INTO studies (id, title, spec, link_token, created_at)
+                 VALUES ($1, $2, $3, $4, $5) RETURNING *",
+            )
+            .bind(id)
+            .bind(title)
+            .bind(spec.to_string())
+            .bind(link_token)
+            .bind(&now)
+            .fetch_one(pool)
+            .await?
+        )))
     }
 
     pub async fn study(&self, id: &str) -> Result<Option<StudyRow>> {
-        let row = sqlx::query("SELECT * FROM studies WHERE id = ?")
-            .bind(id)
-            .fetch_optional(self.pool())
-            .await?;
-        Ok(row.as_ref().map(StudyRow::from_row))
+        on_db!(self.db, reader, |pool| Ok(sqlx::query(
+            "SELECT * FROM studies WHERE id = $1"
+        )
+        .bind(id)
+        .fetch_optional(pool)
+        .await?
+        .as_ref()
+        .map(StudyRow::from_row)))
     }
 
     pub async fn study_by_link(&self, link_token: &str) -> Result<Option<StudyRow>> {
-        let row = sqlx::query("SELECT * FROM studies WHERE link_token = ?")
-            .bind(link_token)
-            .fetch_optional(self.pool())
-            .await?;
-        Ok(row.as_ref().map(StudyRow::from_row))
+        on_db!(self.db, reader, |pool| Ok(sqlx::query(
+            "SELECT * FROM studies WHERE link_token = $1"
+        )
+        .bind(link_token)
+        .fetch_optional(pool)
+        .await?
+        .as_ref()
+        .map(StudyRow::from_row)))
     }
 
     /// Every study, newest first.
     pub async fn studies(&self) -> Result<Vec<StudyRow>> {
-        let rows = sqlx::query("SELECT * FROM studies ORDER BY created_at DESC, id")
-            .fetch_all(self.pool())
-            .await?;
-        Ok(rows.iter().map(StudyRow::from_row).collect())
+        on_db!(self.db, reader, |pool| Ok(sqlx::query(
+            "SELECT * FROM studies ORDER BY created_at DESC, id"
+        )
+        .fetch_all(pool)
+        .await?
+        .iter()
+        .map(StudyRow::from_row)
+        .collect()))
     }
 
     /// A new participant with the next number of the study; `ordering` is computed from the
     /// number by the caller, so both are written in one statement (two people opening the
-    /// link at once get different numbers: the insert retries on the unique number).
+    /// link at once, or on two servers, get different numbers: the insert retries on the
+    /// unique number).
     pub async fn add_participant(
         &self,
         study_id: &str,
@@ -142,161 +153,193 @@ impl Store {
         ordering_for: impl Fn(usize) -> Vec<String>,
     ) -> Result<ParticipantRow> {
         loop {
-            let next: i64 = sqlx::query_scalar(
-                "SELECT COALESCE(MAX(number) + 1, 0) FROM participants WHERE study_id = ?",
+            let next: i64 = on_db!(self.db, writer, |pool| sqlx::query_scalar(
+                "SELECT COALESCE(MAX(number) + 1, 0) FROM participants WHERE study_id = $1",
             )
             .bind(study_id)
-            .fetch_one(self.writer())
-            .await?;
+            .fetch_one(pool)
+            .await?);
             let ordering = serde_json::to_string(&ordering_for(next as usize))
                 .expect("a list of names serialises");
-            let row = sqlx::query(concat!(
+            let now = clock::now();
+            let row = on_db!(self.db, writer, |pool| sqlx::query(
                 "INSERT INTO participants (id, study_id, number, token, ordering, created_at)
-                 VALUES (?, ?, ?, ?, ?, ",
-                now!(),
-                ") ON CONFLICT (study_id, number) DO NOTHING RETURNING *"
-            ))
+                 VALUES ($1, $2, $3, $4, $5, $6)
+                 ON CONFLICT (study_id, number) DO NOTHING RETURNING *",
+            )
             .bind(id)
             .bind(study_id)
             .bind(next)
             .bind(token)
             .bind(ordering)
-            .fetch_optional(self.writer())
-            .await?;
+            .bind(&now)
+            .fetch_optional(pool)
+            .await?
+            .as_ref()
+            .map(ParticipantRow::from_row));
             if let Some(row) = row {
-                return Ok(ParticipantRow::from_row(&row));
+                return Ok(row);
             }
         }
     }
 
     pub async fn participant_by_token(&self, token: &str) -> Result<Option<ParticipantRow>> {
-        let row = sqlx::query("SELECT * FROM participants WHERE token = ?")
-            .bind(token)
-            .fetch_optional(self.pool())
-            .await?;
-        Ok(row.as_ref().map(ParticipantRow::from_row))
+        on_db!(self.db, reader, |pool| Ok(sqlx::query(
+            "SELECT * FROM participants WHERE token = $1"
+        )
+        .bind(token)
+        .fetch_optional(pool)
+        .await?
+        .as_ref()
+        .map(ParticipantRow::from_row)))
     }
 
     /// A study's participants in the order they came.
     pub async fn participants(&self, study_id: &str) -> Result<Vec<ParticipantRow>> {
-        let rows = sqlx::query("SELECT * FROM participants WHERE study_id = ? ORDER BY number")
-            .bind(study_id)
-            .fetch_all(self.pool())
-            .await?;
-        Ok(rows.iter().map(ParticipantRow::from_row).collect())
+        on_db!(self.db, reader, |pool| Ok(sqlx::query(
+            "SELECT * FROM participants WHERE study_id = $1 ORDER BY number"
+        )
+        .bind(study_id)
+        .fetch_all(pool)
+        .await?
+        .iter()
+        .map(ParticipantRow::from_row)
+        .collect()))
     }
 
     /// Record consent (the first time only; a second consent keeps the first time).
     pub async fn consent(&self, participant_id: &str) -> Result<()> {
-        sqlx::query(concat!(
-            "UPDATE participants SET consented_at = ",
-            now!(),
-            " WHERE id = ? AND consented_at IS NULL"
-        ))
-        .bind(participant_id)
-        .execute(self.writer())
-        .await?;
+        let now = clock::now();
+        on_db!(self.db, writer, |pool| {
+            sqlx::query(
+                "UPDATE participants SET consented_at = $1 WHERE id = $2 AND consented_at IS NULL",
+            )
+            .bind(&now)
+            .bind(participant_id)
+            .execute(pool)
+            .await?;
+        });
         Ok(())
     }
 
     /// Link a launched session to a participant's position. Returns `false` when that position
     /// has a session already (the caller launched a second by mistake and must stop it).
     pub async fn link_study_session(&self, row: &StudySessionRow) -> Result<bool> {
-        let done = sqlx::query(
+        let linked = on_db!(self.db, writer, |pool| sqlx::query(
             "INSERT INTO study_sessions (participant_id, position, condition, session_id)
-             VALUES (?, ?, ?, ?) ON CONFLICT (participant_id, position) DO NOTHING",
+             VALUES ($1, $2, $3, $4) ON CONFLICT (participant_id, position) DO NOTHING",
         )
         .bind(&row.participant_id)
         .bind(row.position)
         .bind(&row.condition)
         .bind(&row.session_id)
-        .execute(self.writer())
-        .await?;
-        Ok(done.rows_affected() == 1)
+        .execute(pool)
+        .await?
+        .rows_affected());
+        Ok(linked == 1)
     }
 
     /// The sessions of the participants of a study (or of one participant).
     pub async fn study_sessions(&self, study_id: &str) -> Result<Vec<StudySessionRow>> {
-        let rows = sqlx::query(
+        on_db!(self.db, reader, |pool| Ok(sqlx::query(
             "SELECT s.* FROM study_sessions s JOIN participants p ON p.id = s.participant_id
-             WHERE p.study_id = ? ORDER BY p.number, s.position",
+             WHERE p.study_id = $1 ORDER BY p.number, s.position",
         )
         .bind(study_id)
-        .fetch_all(self.pool())
-        .await?;
-        Ok(rows.iter().map(study_session_from_row).collect())
+        .fetch_all(pool)
+        .await?
+        .iter()
+        .map(study_session_from_row)
+        .collect()))
     }
 
     pub async fn participant_sessions(&self, participant_id: &str) -> Result<Vec<StudySessionRow>> {
-        let rows =
-            sqlx::query("SELECT * FROM study_sessions WHERE participant_id = ? ORDER BY position")
-                .bind(participant_id)
-                .fetch_all(self.pool())
-                .await?;
-        Ok(rows.iter().map(study_session_from_row).collect())
+        on_db!(self.db, reader, |pool| Ok(sqlx::query(
+            "SELECT * FROM study_sessions WHERE participant_id = $1 ORDER BY position"
+        )
+        .bind(participant_id)
+        .fetch_all(pool)
+        .await?
+        .iter()
+        .map(study_session_from_row)
+        .collect()))
     }
 
     /// Store the survey after one position, all questions in one transaction; a survey
-    /// answered before is kept as it was.
+    /// answered before is kept as it was. Two submissions at once (two tabs, two servers):
+    /// the second one's insert waits for the first one's commit and then inserts nothing, and
+    /// it is answered as already answered too.
     pub async fn save_study_survey(
         &self,
         participant_id: &str,
         position: i64,
         answers: &[(String, i64)],
     ) -> Result<SurveyOutcome> {
-        let mut tx = self.writer().begin().await?;
-        let before: i64 = sqlx::query_scalar(
-            "SELECT COUNT(*) FROM study_answers WHERE participant_id = ? AND position = ?",
-        )
-        .bind(participant_id)
-        .bind(position)
-        .fetch_one(&mut *tx)
-        .await?;
-        if before > 0 {
-            return Ok(SurveyOutcome::AlreadyAnswered);
-        }
-        for (question, value) in answers {
-            sqlx::query(concat!(
-                "INSERT INTO study_answers (participant_id, position, question, value, answered_at)
-                 VALUES (?, ?, ?, ?, ",
-                now!(),
-                ")"
-            ))
+        let now = clock::now();
+        on_db!(self.db, writer, |pool| {
+            let mut tx = pool.begin().await?;
+            let before: i64 = sqlx::query_scalar(
+                "SELECT COUNT(*) FROM study_answers WHERE participant_id = $1 AND position = $2",
+            )
             .bind(participant_id)
             .bind(position)
-            .bind(question)
-            .bind(value)
-            .execute(&mut *tx)
+            .fetch_one(&mut *tx)
             .await?;
-        }
-        tx.commit().await?;
-        Ok(SurveyOutcome::Stored)
+            if before > 0 {
+                return Ok(SurveyOutcome::AlreadyAnswered);
+            }
+            for (question, value) in answers {
+                let inserted: Option<i64> = sqlx::query_scalar(
+                    "INSERT INTO study_answers (participant_id, position, question, value, answered_at)
+                     VALUES ($1, $2, $3, $4, $5)
+                     ON CONFLICT (participant_id, position, question) DO NOTHING RETURNING position",
+                )
+                .bind(participant_id)
+                .bind(position)
+                .bind(question)
+                .bind(value)
+                .bind(&now)
+                .fetch_optional(&mut *tx)
+                .await?;
+                if inserted.is_none() {
+                    // Rolled back as `tx` drops: the other submission's answers stand.
+                    return Ok(SurveyOutcome::AlreadyAnswered);
+                }
+            }
+            tx.commit().await?;
+            Ok(SurveyOutcome::Stored)
+        })
     }
 
     /// Every survey answer of a study's participants.
     pub async fn study_answers(&self, study_id: &str) -> Result<Vec<StudyAnswerRow>> {
-        let rows = sqlx::query(
+        on_db!(self.db, reader, |pool| Ok(sqlx::query(
             "SELECT a.* FROM study_answers a JOIN participants p ON p.id = a.participant_id
-             WHERE p.study_id = ? ORDER BY p.number, a.position, a.question",
+             WHERE p.study_id = $1 ORDER BY p.number, a.position, a.question",
         )
         .bind(study_id)
-        .fetch_all(self.pool())
-        .await?;
-        Ok(rows.iter().map(study_answer_from_row).collect())
+        .fetch_all(pool)
+        .await?
+        .iter()
+        .map(study_answer_from_row)
+        .collect()))
     }
 
     /// The positions whose survey a participant has answered.
     pub async fn answered_positions(&self, participant_id: &str) -> Result<Vec<i64>> {
-        sqlx::query_scalar(
-            "SELECT DISTINCT position FROM study_answers WHERE participant_id = ? ORDER BY position",
-        )
-        .bind(participant_id)
-        .fetch_all(self.pool())
-        .await
+        on_db!(self.db, reader, |pool| {
+            sqlx::query_scalar(
+                "SELECT DISTINCT position FROM study_answers WHERE participant_id = $1
+                 ORDER BY position",
+            )
+            .bind(participant_id)
+            .fetch_all(pool)
+            .await
+        })
     }
 }
 
-fn study_session_from_row(r: &SqliteRow) -> StudySessionRow {
+fn study_session_from_row(r: &impl StoreRow) -> StudySessionRow {
     StudySessionRow {
         participant_id: r.get("participant_id"),
         position: r.get("position"),
@@ -305,7 +348,7 @@ fn study_session_from_row(r: &SqliteRow) -> StudySessionRow {
     }
 }
 
-fn study_answer_from_row(r: &SqliteRow) -> StudyAnswerRow {
+fn study_answer_from_row(r: &impl StoreRow) -> StudyAnswerRow {
     StudyAnswerRow {
         participant_id: r.get("participant_id"),
         position: r.get("position"),
@@ -318,13 +361,17 @@ impl Store {
     /// Seconds from a session's start to its end (or to now while it runs); `None` before it
     /// started.
     pub async fn session_seconds(&self, session_id: &str) -> Result<Option<f64>> {
-        sqlx::query_scalar(concat!(
-            "SELECT (julianday(COALESCE(ended_at, ",
-            now!(),
-            ")) - julianday(started_at)) * 86400.0 FROM sessions WHERE id = ? AND started_at IS NOT NULL"
-        ))
-        .bind(session_id)
-        .fetch_optional(self.pool())
-        .await
+        let times: Option<(Option<String>, Option<String>)> = on_db!(self.db, reader, |pool| {
+            sqlx::query("SELECT started_at, ended_at FROM sessions WHERE id = $1")
+                .bind(session_id)
+                .fetch_optional(pool)
+                .await?
+                .map(|r| (r.get("started_at"), r.get("ended_at")))
+        });
+        let Some((Some(started), ended)) = times else {
+            return Ok(None);
+        };
+        let ended = ended.unwrap_or_else(clock::now);
+        Ok(clock::span(Some(&started), Some(&ended)))
     }
 }

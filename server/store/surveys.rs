@@ -1,9 +1,8 @@
 //! The `surveys` table: a trainer's answers to the paper's three 5-point questions.
 
+use super::backend::StoreRow;
+use super::{Result, Store, clock};
 use serde::{Deserialize, Serialize};
-use sqlx::Row;
-
-use super::{Result, Store};
 
 /// Overall experience, perceived intelligence of the robot, cognitive ease: each 1 to 5.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
@@ -43,31 +42,40 @@ impl Survey {
 impl Store {
     /// Store (or replace: a trainer may change their mind) the survey of a session.
     pub async fn save_survey(&self, session_id: &str, s: &Survey) -> Result<()> {
-        sqlx::query(concat!(
-            "INSERT OR REPLACE INTO surveys
-             (session_id, overall_experience, perceived_intelligence, cognitive_ease, answered_at)
-             VALUES (?, ?, ?, ?, ",
-            now!(),
-            ")"
-        ))
-        .bind(session_id)
-        .bind(i64::from(s.overall_experience))
-        .bind(i64::from(s.perceived_intelligence))
-        .bind(i64::from(s.cognitive_ease))
-        .execute(self.writer())
-        .await?;
+        let now = clock::now();
+        on_db!(self.db, writer, |pool| {
+            sqlx::query(
+                "INSERT INTO surveys
+                 (session_id, overall_experience, perceived_intelligence, cognitive_ease, answered_at)
+                 VALUES ($1, $2, $3, $4, $5)
+                 ON CONFLICT (session_id) DO UPDATE SET
+                   overall_experience = excluded.overall_experience,
+                   perceived_intelligence = excluded.perceived_intelligence,
+                   cognitive_ease = excluded.cognitive_ease,
+                   answered_at = excluded.answered_at",
+            )
+            .bind(session_id)
+            .bind(i64::from(s.overall_experience))
+            .bind(i64::from(s.perceived_intelligence))
+            .bind(i64::from(s.cognitive_ease))
+            .bind(&now)
+            .execute(pool)
+            .await?;
+        });
         Ok(())
     }
 
     pub async fn survey(&self, session_id: &str) -> Result<Option<Survey>> {
-        let row = sqlx::query("SELECT * FROM surveys WHERE session_id = ?")
-            .bind(session_id)
-            .fetch_optional(self.pool())
-            .await?;
-        Ok(row.map(|r| Survey {
-            overall_experience: r.get::<i64, _>("overall_experience") as u8,
-            perceived_intelligence: r.get::<i64, _>("perceived_intelligence") as u8,
-            cognitive_ease: r.get::<i64, _>("cognitive_ease") as u8,
-        }))
+        on_db!(self.db, reader, |pool| Ok(sqlx::query(
+            "SELECT * FROM surveys WHERE session_id = $1"
+        )
+        .bind(session_id)
+        .fetch_optional(pool)
+        .await?
+        .map(|r| Survey {
+            overall_experience: r.get::<i64>("overall_experience") as u8,
+            perceived_intelligence: r.get::<i64>("perceived_intelligence") as u8,
+            cognitive_ease: r.get::<i64>("cognitive_ease") as u8,
+        })))
     }
 }

@@ -4,11 +4,10 @@
 //! shared link without one) belong to the anonymous trainer.
 
 use serde::Serialize;
-use sqlx::Row;
-use sqlx::sqlite::SqliteRow;
 
+use super::backend::StoreRow;
 use super::queries::{parse_value, value_json};
-use super::{Result, Store, Survey};
+use super::{Result, Store, Survey, clock};
 use crate::session::AnswerValue;
 
 /// How a trainer came to the session.
@@ -63,7 +62,7 @@ impl TrainerRow {
         }
     }
 
-    fn from_row(r: &SqliteRow) -> Self {
+    fn from_row(r: &impl StoreRow) -> Self {
         Self {
             id: r.get("id"),
             session_id: r.get("session_id"),
@@ -135,40 +134,49 @@ impl Store {
         token: &str,
         origin: TrainerOrigin,
     ) -> Result<AddTrainer> {
-        let row = sqlx::query(concat!(
+        let now = clock::now();
+        let row = on_db!(self.db, writer, |pool| sqlx::query(
             "INSERT INTO trainers (session_id, name, token, origin, created_at)
-             VALUES (?, ?, ?, ?, ",
-            now!(),
-            ") ON CONFLICT (session_id, name) DO NOTHING RETURNING *"
-        ))
+             VALUES ($1, $2, $3, $4, $5) ON CONFLICT (session_id, name) DO NOTHING RETURNING *",
+        )
         .bind(session_id)
         .bind(name)
         .bind(token)
         .bind(origin)
-        .fetch_optional(self.writer())
-        .await?;
+        .bind(&now)
+        .fetch_optional(pool)
+        .await?
+        .as_ref()
+        .map(TrainerRow::from_row));
         Ok(match row {
-            Some(r) => AddTrainer::Added(TrainerRow::from_row(&r)),
+            Some(r) => AddTrainer::Added(r),
             None => AddTrainer::NameTaken,
         })
     }
 
     /// The trainer whose own token this is, if any.
     pub async fn trainer_by_token(&self, token: &str) -> Result<Option<TrainerRow>> {
-        let row = sqlx::query("SELECT * FROM trainers WHERE token = ?")
-            .bind(token)
-            .fetch_optional(self.pool())
-            .await?;
-        Ok(row.as_ref().map(TrainerRow::from_row))
+        on_db!(self.db, reader, |pool| Ok(sqlx::query(
+            "SELECT * FROM trainers WHERE token = $1"
+        )
+        .bind(token)
+        .fetch_optional(pool)
+        .await?
+        .as_ref()
+        .map(TrainerRow::from_row)))
     }
 
     /// A session's named trainers in the order they came.
     pub async fn trainers(&self, session_id: &str) -> Result<Vec<TrainerRow>> {
-        let rows = sqlx::query("SELECT * FROM trainers WHERE session_id = ? ORDER BY id")
-            .bind(session_id)
-            .fetch_all(self.pool())
-            .await?;
-        Ok(rows.iter().map(TrainerRow::from_row).collect())
+        on_db!(self.db, reader, |pool| Ok(sqlx::query(
+            "SELECT * FROM trainers WHERE session_id = $1 ORDER BY id"
+        )
+        .bind(session_id)
+        .fetch_all(pool)
+        .await?
+        .iter()
+        .map(TrainerRow::from_row)
+        .collect()))
     }
 
     /// Store one trainer's own answer to a query that takes several; returns after the commit.
@@ -180,85 +188,91 @@ impl Store {
         value: AnswerValue,
         latency_ms: u64,
     ) -> Result<VoteOutcome> {
-        let inserted = sqlx::query(concat!(
-            "INSERT INTO trainer_answers (query_id, session_id, trainer_id, value, latency_ms, answered_at)
-             VALUES (?, ?, ?, ?, ?, ",
-            now!(),
-            ") ON CONFLICT (query_id, trainer_id) DO NOTHING RETURNING query_id"
-        ))
-        .bind(query_id)
-        .bind(session_id)
-        .bind(trainer_id)
-        .bind(value_json(value))
-        .bind(latency_ms as i64)
-        .fetch_optional(self.writer())
-        .await?;
-        if inserted.is_some() {
-            return Ok(VoteOutcome::Committed);
-        }
-        let stored: String =
-            sqlx::query("SELECT value FROM trainer_answers WHERE query_id = ? AND trainer_id = ?")
-                .bind(query_id)
-                .bind(trainer_id)
-                .fetch_one(self.writer())
-                .await?
-                .get("value");
-        Ok(VoteOutcome::AlreadyAnswered(parse_value(&stored)))
+        let now = clock::now();
+        let stored: Option<String> = on_db!(self.db, writer, |pool| {
+            let inserted: Option<i64> = sqlx::query_scalar(
+                "INSERT INTO trainer_answers (query_id, session_id, trainer_id, value, latency_ms, answered_at)
+                 VALUES ($1, $2, $3, $4, $5, $6)
+                 ON CONFLICT (query_id, trainer_id) DO NOTHING RETURNING query_id",
+            )
+            .bind(query_id)
+            .bind(session_id)
+            .bind(trainer_id)
+            .bind(value_json(value))
+            .bind(latency_ms as i64)
+            .bind(&now)
+            .fetch_optional(pool)
+            .await?;
+            match inserted {
+                Some(_) => None,
+                None => Some(
+                    sqlx::query_scalar(
+                        "SELECT value FROM trainer_answers WHERE query_id = $1 AND trainer_id = $2",
+                    )
+                    .bind(query_id)
+                    .bind(trainer_id)
+                    .fetch_one(pool)
+                    .await?,
+                ),
+            }
+        });
+        Ok(match stored {
+            None => VoteOutcome::Committed,
+            Some(v) => VoteOutcome::AlreadyAnswered(parse_value(&v)),
+        })
     }
 
     /// The trainers' own answers to one query so far, in the order given (a query asked again
     /// after a restart keeps them).
     pub async fn query_votes(&self, query_id: i64) -> Result<Vec<(TrainerRef, AnswerValue)>> {
-        let rows = sqlx::query(
-            "SELECT t.id, t.name, v.value FROM trainer_answers v JOIN trainers t ON t.id = v.trainer_id
-             WHERE v.query_id = ? ORDER BY v.rowid",
-        )
-        .bind(query_id)
-        .fetch_all(self.pool())
-        .await?;
-        Ok(rows
+        on_db!(self.db, reader, |pool| {
+            Ok(sqlx::query(
+                "SELECT t.id, t.name, v.value
+                 FROM trainer_answers v JOIN trainers t ON t.id = v.trainer_id
+                 WHERE v.query_id = $1 ORDER BY v.rowid",
+            )
+            .bind(query_id)
+            .fetch_all(pool)
+            .await?
             .iter()
             .map(|r| {
                 let who = TrainerRef {
                     id: r.get("id"),
                     name: r.get("name"),
                 };
-                (who, parse_value(r.get("value")))
+                (who, parse_value(&r.get::<String>("value")))
             })
             .collect())
+        })
     }
 
     /// Every answer a person gave in a session, in the order asked: the answers of a `first`
     /// session (anonymous ones with no trainer) and each trainer's own answers of a session
     /// that combines several.
     pub async fn person_answers(&self, session_id: &str) -> Result<Vec<PersonAnswer>> {
-        let rows = sqlx::query(
-            "SELECT q.seq, x.trainer_id, x.value, x.latency_ms,
-                    julianday(q.asked_at) * 86400.0 AS asked_s,
-                    julianday(x.answered_at) * 86400.0 AS answered_s
+        on_db!(self.db, reader, |pool| Ok(sqlx::query(
+            "SELECT q.seq, x.trainer_id, x.value, x.latency_ms, q.asked_at, x.answered_at
              FROM (SELECT query_id, trainer_id, value, latency_ms, answered_at, 0 AS kind
-                   FROM answers WHERE session_id = ? AND who = 'trainer'
+                   FROM answers WHERE session_id = $1 AND who = 'trainer'
                    UNION ALL
                    SELECT query_id, trainer_id, value, latency_ms, answered_at, 1 AS kind
-                   FROM trainer_answers WHERE session_id = ?) x
+                   FROM trainer_answers WHERE session_id = $1) x
              JOIN queries q ON q.id = x.query_id
              ORDER BY q.seq, x.kind, x.answered_at",
         )
         .bind(session_id)
-        .bind(session_id)
-        .fetch_all(self.pool())
-        .await?;
-        Ok(rows
-            .iter()
-            .map(|r| PersonAnswer {
-                query_id: r.get("seq"),
-                trainer_id: r.get("trainer_id"),
-                value: parse_value(r.get("value")),
-                latency_ms: r.get("latency_ms"),
-                asked_s: r.get("asked_s"),
-                answered_s: r.get("answered_s"),
-            })
-            .collect())
+        .fetch_all(pool)
+        .await?
+        .iter()
+        .map(|r| PersonAnswer {
+            query_id: r.get("seq"),
+            trainer_id: r.get("trainer_id"),
+            value: parse_value(&r.get::<String>("value")),
+            latency_ms: r.get("latency_ms"),
+            asked_s: clock::seconds(&r.get::<String>("asked_at")).unwrap_or(f64::NAN),
+            answered_s: clock::seconds(&r.get::<String>("answered_at")).unwrap_or(f64::NAN),
+        })
+        .collect()))
     }
 
     /// Store (or replace) a named trainer's survey.
@@ -268,39 +282,48 @@ impl Store {
         session_id: &str,
         s: &Survey,
     ) -> Result<()> {
-        sqlx::query(concat!(
-            "INSERT OR REPLACE INTO trainer_surveys
-             (trainer_id, session_id, overall_experience, perceived_intelligence, cognitive_ease, answered_at)
-             VALUES (?, ?, ?, ?, ?, ",
-            now!(),
-            ")"
-        ))
-        .bind(trainer_id)
-        .bind(session_id)
-        .bind(i64::from(s.overall_experience))
-        .bind(i64::from(s.perceived_intelligence))
-        .bind(i64::from(s.cognitive_ease))
-        .execute(self.writer())
-        .await?;
+        let now = clock::now();
+        on_db!(self.db, writer, |pool| {
+            sqlx::query(
+                "INSERT INTO trainer_surveys
+                 (trainer_id, session_id, overall_experience, perceived_intelligence, cognitive_ease, answered_at)
+                 VALUES ($1, $2, $3, $4, $5, $6)
+                 ON CONFLICT (trainer_id) DO UPDATE SET
+                   session_id = excluded.session_id,
+                   overall_experience = excluded.overall_experience,
+                   perceived_intelligence = excluded.perceived_intelligence,
+                   cognitive_ease = excluded.cognitive_ease,
+                   answered_at = excluded.answered_at",
+            )
+            .bind(trainer_id)
+            .bind(session_id)
+            .bind(i64::from(s.overall_experience))
+            .bind(i64::from(s.perceived_intelligence))
+            .bind(i64::from(s.cognitive_ease))
+            .bind(&now)
+            .execute(pool)
+            .await?;
+        });
         Ok(())
     }
 
     /// The named trainers' surveys of a session, by trainer.
     pub async fn trainer_surveys(&self, session_id: &str) -> Result<Vec<(i64, Survey)>> {
-        let rows = sqlx::query("SELECT * FROM trainer_surveys WHERE session_id = ?")
-            .bind(session_id)
-            .fetch_all(self.pool())
-            .await?;
-        Ok(rows
-            .iter()
-            .map(|r| {
-                let survey = Survey {
-                    overall_experience: r.get::<i64, _>("overall_experience") as u8,
-                    perceived_intelligence: r.get::<i64, _>("perceived_intelligence") as u8,
-                    cognitive_ease: r.get::<i64, _>("cognitive_ease") as u8,
-                };
-                (r.get("trainer_id"), survey)
-            })
-            .collect())
+        on_db!(self.db, reader, |pool| Ok(sqlx::query(
+            "SELECT * FROM trainer_surveys WHERE session_id = $1"
+        )
+        .bind(session_id)
+        .fetch_all(pool)
+        .await?
+        .iter()
+        .map(|r| {
+            let survey = Survey {
+                overall_experience: r.get::<i64>("overall_experience") as u8,
+                perceived_intelligence: r.get::<i64>("perceived_intelligence") as u8,
+                cognitive_ease: r.get::<i64>("cognitive_ease") as u8,
+            };
+            (r.get("trainer_id"), survey)
+        })
+        .collect()))
     }
 }

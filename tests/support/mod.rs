@@ -2,6 +2,7 @@
 
 pub mod binary;
 pub mod cli;
+pub mod postgres;
 pub mod py_venv;
 pub mod pyarrow_py;
 pub mod python_client;

@@ -44,9 +44,15 @@ pub async fn state_with(dir: &std::path::Path, tweak: impl FnOnce(&mut HubConfig
 }
 
 pub async fn serve(dir: &std::path::Path) -> Running {
+    serve_on(dir, None).await
+}
+
+/// As [`serve`], on the database at `database` (a URL) instead of the data dir's.
+pub async fn serve_on(dir: &std::path::Path, database: Option<&str>) -> Running {
     start(ServeArgs {
         addr: "127.0.0.1:0".parse().unwrap(),
         data_dir: dir.to_path_buf(),
+        database: database.map(str::to_owned),
         token: Some(TOKEN.into()),
         max_sessions: Some(4),
         web_dir: Some(root().join("web")),
