@@ -30,19 +30,24 @@
 //!   resume (on a remote env, which cannot replay, its latest whole-run checkpoint instead, then
 //!   the stored answers to the moments it meets again and the stored answered steps it does
 //!   not), checkpoints. No async runtime, no database.
-//! - [`study`]: human-subject studies (the paper's Figures 4 and 6): which conditions a
-//!   within-subject study compares and the counterbalanced order (Williams, random, fixed) in
-//!   which each participant meets them; their analysis is [`report::within_subject`].
+//! - [`study`]: human-subject studies (the paper's Figures 4 and 6): what a researcher
+//!   launches (conditions, budget, survey, consent), the counterbalanced order (Williams,
+//!   random, fixed) in which each participant meets the conditions, where a participant is
+//!   (derived from what is stored), the results and their within-subject tests
+//!   ([`report::within_subject`]), and the pilot with simulated participants (power before
+//!   recruiting).
 //!
 //! The edge (files, processes, network, database):
 //!
-//! - [`store`]: SQLite through sqlx (schema in `migrations/`): sessions, queries, answers,
-//!   episodes, checkpoints.
+//! - [`store`]: SQLite (embedded, the default) or PostgreSQL through sqlx, one SQL text for
+//!   both (schemas in `migrations/` and `migrations/postgres/`): sessions, queries, answers,
+//!   episodes, checkpoints, trainers, studies.
 //! - [`hub`]: the sessions a server runs: a cap on how many at once, one thread each, and one
 //!   owner task each that alone holds the session's live state (events, answers, undo,
 //!   deadlines and status in one `select!`; commit, then acknowledge); stop, resume and
 //!   graceful shutdown.
-//! - [`http`]: REST routes, security headers, the web UI's files; [`ws`]: the trainer
+//! - [`http`]: REST routes (sessions, trainers, datasets, studies and their participants),
+//!   security headers, the web UI's files; [`ws`]: the trainer
 //!   websocket and its typed protocol; [`api`]: what both share (the app state, who may call,
 //!   every refusal and its JSON shape); [`json_input`]: clients' JSON read with errors
 //!   that name the field that was wrong.
@@ -51,15 +56,16 @@
 //!   (`docs/env-protocol.md`): a blocking TCP client that is an `Env` like the built-in tasks,
 //!   with a deadline on every read and a reason for every fault.
 //! - [`export`]: a session's datasets for other tools: transitions or preference pairs as
-//!   Parquet, the policy as safetensors.
+//!   Parquet, the policy as safetensors; a study's tidy table as CSV and Parquet.
 //! - [`record`]: the Rerun recording of a session (scene per step, rewards, predicates,
 //!   queries and answers on `step` and `episode` timelines) to an `.rrd` file and/or a live
 //!   viewer, from a logging thread behind a bounded channel.
 //! - [`report`]: the paper's Figures 3 and 5: the run grid, run as child processes here or as
 //!   Slurm job array tasks (one executor trait, two implementations), aggregation over seeds,
-//!   `table.md`, SVG and PNG figures (aggregation and tables are pure functions).
+//!   `table.md`, SVG and PNG figures (aggregation and tables are pure functions); a study's
+//!   figure; rank tests.
 //! - [`cli`]: the `dualrep` command line: `serve`, `sim`, `train`, `prefs`, `expert`,
-//!   `reproduce`, `export`, `bench`, `loadtest`.
+//!   `reproduce`, `export`, `bench`, `loadtest`, `study` (create, list, pilot), `report study`.
 
 pub use dualrep_core::{guidance, rl, scene_graph, sim};
 
