@@ -188,7 +188,7 @@ pub async fn results(
 
 #[derive(Debug, Deserialize, utoipa::IntoParams)]
 pub struct TableQuery {
-    /// `csv` [default] or `parquet`.
+    /// `csv` (the default) or `parquet`.
     pub format: Option<String>,
 }
 
