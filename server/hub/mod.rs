@@ -247,6 +247,9 @@ impl Hub {
             {
                 Ok(())
             }
+            None if self.store.is_shared() && row.status.is_active() => Err(HubError::Conflict(
+                format!("session {id} runs on another server sharing this database: stop it there"),
+            )),
             _ => Err(HubError::Conflict(format!(
                 "session {id} is {}, not running",
                 self.status_of(&row).as_str()
