@@ -43,6 +43,62 @@ async fn owners(db: &mut sqlx::PgConnection) -> HashMap<String, (String, Option<
         .collect()
 }
 
+/// Launch a synthetic session on `api`'s server; its id.
+async fn launch(api: &Api, seed: u64) -> String {
+    let (status, r) = api
+        .post(
+            "/api/sessions",
+            json!({"task": "reaching", "method": "ef-50", "trainer": "synthetic", "seed": seed,
+                   "steps": STEPS,
+                   "params": {"hidden": [32, 32], "batch_size": 32, "record": false,
+                              "checkpoint_every": 500}}),
+        )
+        .await;
+    assert_eq!(status, 201, "{r}");
+    r["id"].as_str().unwrap().to_string()
+}
+
+/// Every answer of session `id` (read through `api`) is to a different query, and every query
+/// stored for it has its one answer.
+async fn asked_once(api: &Api, db: &mut sqlx::PgConnection, id: &str) {
+    let answers: Value = api.get(&format!("/api/sessions/{id}/answers")).await;
+    let answers = answers.as_array().unwrap();
+    let seqs: HashSet<i64> = answers
+        .iter()
+        .map(|a| a["query_id"].as_i64().unwrap())
+        .collect();
+    assert_eq!(seqs.len(), answers.len(), "a query asked twice in {id}");
+    assert!(!answers.is_empty(), "{id} asked nothing");
+    let queries: i64 = sqlx::query("SELECT COUNT(*) AS n FROM queries WHERE session_id = $1")
+        .bind(id)
+        .fetch_one(db)
+        .await
+        .unwrap()
+        .get("n");
+    assert_eq!(
+        queries as usize,
+        answers.len(),
+        "{id}: every query answered once"
+    );
+}
+
+/// Wait until session `id` has finished (read through `api`), failing on any other end.
+async fn finishes(api: &Api, id: &str) {
+    wait_for(
+        &format!("{id} finishes"),
+        Duration::from_secs(300),
+        async || {
+            let v = api.get(&format!("/api/sessions/{id}")).await;
+            assert!(
+                !["failed", "stopped", "interrupted"].contains(&v["status"].as_str().unwrap()),
+                "{v}"
+            );
+            (v["status"] == "finished").then_some(())
+        },
+    )
+    .await;
+}
+
 async fn wait_for<T>(what: &str, within: Duration, mut check: impl AsyncFnMut() -> Option<T>) -> T {
     let start = Instant::now();
     loop {
@@ -66,17 +122,7 @@ async fn a_killed_servers_session_is_taken_over_and_finishes_on_another() {
     let (mut a, api_a) = start(dir_a.path(), &pg.url, "2");
     let mut ids = Vec::new();
     for seed in 1..=3 {
-        let (status, r) = api_a
-            .post(
-                "/api/sessions",
-                json!({"task": "reaching", "method": "ef-50", "trainer": "synthetic", "seed": seed,
-                       "steps": STEPS,
-                       "params": {"hidden": [32, 32], "batch_size": 32, "record": false,
-                                  "checkpoint_every": 500}}),
-            )
-            .await;
-        assert_eq!(status, 201, "{r}");
-        ids.push(r["id"].as_str().unwrap().to_string());
+        ids.push(launch(&api_a, seed).await);
     }
     let server_a = wait_for("A runs two sessions", Duration::from_secs(30), async || {
         let o = owners(&mut db).await;
@@ -130,41 +176,77 @@ async fn a_killed_servers_session_is_taken_over_and_finishes_on_another() {
 
     // Every session finishes on B; no query was asked twice.
     for id in &ids {
-        let row = wait_for(
-            &format!("{id} finishes"),
-            Duration::from_secs(300),
-            async || {
-                let v = api_b.get(&format!("/api/sessions/{id}")).await;
-                assert!(
-                    !["failed", "stopped", "interrupted"].contains(&v["status"].as_str().unwrap()),
-                    "{v}"
-                );
-                (v["status"] == "finished").then_some(v)
-            },
-        )
-        .await;
-        let answers: Value = api_b.get(&format!("/api/sessions/{id}/answers")).await;
-        let answers = answers.as_array().unwrap();
-        let seqs: HashSet<i64> = answers
-            .iter()
-            .map(|a| a["query_id"].as_i64().unwrap())
-            .collect();
-        assert_eq!(seqs.len(), answers.len(), "a query asked twice in {id}");
-        assert!(!answers.is_empty(), "{id} asked nothing: {row}");
-        let queries: i64 = sqlx::query("SELECT COUNT(*) AS n FROM queries WHERE session_id = $1")
-            .bind(id)
-            .fetch_one(&mut db)
-            .await
-            .unwrap()
-            .get("n");
-        assert_eq!(
-            queries as usize,
-            answers.len(),
-            "{id}: every query answered once"
-        );
+        finishes(&api_b, id).await;
+        asked_once(&api_b, &mut db, id).await;
     }
     let o = owners(&mut db).await;
     assert_eq!(o[&taken].1.as_deref(), Some(server_b.as_str()));
     b.kill().unwrap();
     b.wait().unwrap();
+}
+
+/// A server that finds its lease taken (the `owner` column changed under it) ends its copy
+/// without writing more; when the other lease runs out it claims the session again, which
+/// resumes from what was stored and finishes, every query asked once.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_server_whose_lease_is_taken_stops_its_copy_and_the_session_resumes() {
+    let Some(pg) = postgres::database().await else {
+        return;
+    };
+    let mut db = sqlx::PgConnection::connect(&pg.url).await.unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let (mut server, api) = start(dir.path(), &pg.url, "1");
+    let id = launch(&api, 4).await;
+    let me = wait_for("the session runs", Duration::from_secs(30), async || {
+        let o = owners(&mut db).await;
+        let (status, owner) = &o[&id];
+        (status == "running").then(|| owner.clone().unwrap())
+    })
+    .await;
+    // Another (pretend) server holds it for 5 s.
+    sqlx::query(
+        "UPDATE sessions SET owner = 'intruder', lease_until = now() + interval '5 seconds'
+         WHERE id = $1",
+    )
+    .bind(&id)
+    .execute(&mut db)
+    .await
+    .unwrap();
+    let taken = Instant::now();
+    // The server renews within 2 s, finds the session gone and drops its copy: from then on
+    // its copy stores nothing (a running synthetic session stores answers many times a second).
+    let stored = async |db: &mut sqlx::PgConnection| -> i64 {
+        sqlx::query("SELECT COUNT(*) AS n FROM answers WHERE session_id = $1")
+            .bind(&id)
+            .fetch_one(db)
+            .await
+            .unwrap()
+            .get("n")
+    };
+    tokio::time::sleep_until((taken + Duration::from_secs(3)).into()).await;
+    let before = stored(&mut db).await;
+    tokio::time::sleep_until((taken + Duration::from_millis(4700)).into()).await;
+    assert_eq!(
+        stored(&mut db).await,
+        before,
+        "the dropped copy wrote answers"
+    );
+    // After the pretend lease it claims the session again.
+    wait_for(
+        "the server claims it again",
+        Duration::from_secs(10),
+        async || {
+            let o = owners(&mut db).await;
+            (o[&id].1.as_deref() == Some(me.as_str())).then_some(())
+        },
+    )
+    .await;
+    assert!(
+        taken.elapsed() >= Duration::from_secs(3),
+        "not before the other lease ran out"
+    );
+    finishes(&api, &id).await;
+    asked_once(&api, &mut db, &id).await;
+    server.kill().unwrap();
+    server.wait().unwrap();
 }
