@@ -158,7 +158,9 @@ impl Owner {
                 // Answers the checkpoint relies on must be stored before it is.
                 self.flush().await?;
                 if let Some(bytes) = c.resume {
-                    // Before its row: the row says the session got this far.
+                    // Before its row: the row says the session got this far. On PostgreSQL in
+                    // the database too, for a server that takes the session over.
+                    self.store.save_resume(&self.id, &bytes).await?;
                     if let Err(e) = self.hub.write_checkpoint(&self.id, "resume", bytes).await {
                         tracing::error!(session = %self.id, "writing a resume checkpoint: {e}");
                     }

@@ -63,6 +63,9 @@ pub(super) enum Command {
     Stop(oneshot::Sender<()>),
     /// The server shuts down: checkpoint and end as interrupted.
     Shutdown,
+    /// This server lost the session's lease (PostgreSQL: another server took it over, or the
+    /// lease could not be renewed in time): end this copy without writing anything more.
+    Lost,
 }
 
 /// What a joining browser gets: the messages that bring it up to date (progress, the open
@@ -158,5 +161,9 @@ impl SessionHandle {
 
     pub(super) fn shutdown(&self) {
         let _ = self.commands.send(Command::Shutdown);
+    }
+
+    pub(super) fn lost(&self) {
+        let _ = self.commands.send(Command::Lost);
     }
 }

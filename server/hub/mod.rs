@@ -12,11 +12,14 @@
 //! - `remote`: reaching a session's remote env from its thread, and what it resumes from.
 //! - `recording`: the session's Rerun recording as its observer.
 //! - `episode_frames`: the frames kept for replay.
+//! - `leases`: on PostgreSQL, several servers share the sessions: each claims sessions for its
+//!   free slots and holds them under a lease it renews (docs/serving-several.md).
 
 mod answers;
 mod episode_frames;
 mod events;
 mod handle;
+mod leases;
 mod owner;
 mod recording;
 mod remote;
@@ -35,6 +38,7 @@ use tokio::task::JoinHandle;
 
 pub use answers::UNDO_WINDOW;
 pub use handle::{AnswerReply, Identity, Joined, SessionHandle, Snapshot};
+pub use leases::{CLAIM_EVERY, LEASE};
 
 use crate::session::{PlanError, SessionPlan, SessionSpec};
 use crate::store::{NewSession, SessionRow, Status, Store, StoredSpecError};
@@ -61,6 +65,13 @@ pub struct Hub {
     sessions: Mutex<HashMap<String, SessionHandle>>,
     slots: Arc<Semaphore>,
     tasks: Mutex<Vec<JoinHandle<()>>>,
+    /// This process's id among the servers of one PostgreSQL (random, logged at start): the
+    /// `owner` of the sessions it runs.
+    pub server_id: String,
+    /// Wakes the claim loop (a launch or resume on PostgreSQL).
+    claim_now: tokio::sync::Notify,
+    /// One claim at a time (the loop's, a launch's), so that free slots are counted once.
+    claiming: tokio::sync::Mutex<()>,
 }
 
 /// Why the hub refused.
@@ -97,11 +108,32 @@ impl Hub {
             sessions: Mutex::new(HashMap::new()),
             slots,
             tasks: Mutex::new(Vec::new()),
+            server_id: random_hex(8),
+            claim_now: tokio::sync::Notify::new(),
+            claiming: tokio::sync::Mutex::new(()),
         })
     }
 
     /// After a restart: mark what was running as interrupted and start the queue again.
+    ///
+    /// On PostgreSQL other servers may be running sessions: nothing is marked; this server's
+    /// claim loop starts, and takes queued sessions and those whose lease ran out (a server,
+    /// perhaps this one before its restart, died while running them) as it has free slots.
     pub async fn recover(self: &Arc<Self>) -> Result<Vec<String>, HubError> {
+        if self.store.is_shared() {
+            tracing::info!(
+                server = %self.server_id,
+                "sharing the database with any other servers: claiming sessions under leases of {:?}",
+                leases::LEASE
+            );
+            self.claim_once().await;
+            let task = tokio::spawn(self.clone().run_leases());
+            self.tasks
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .push(task);
+            return Ok(Vec::new());
+        }
         let (interrupted, queued) = self.store.recover_after_restart().await?;
         for id in queued {
             if let Some(row) = self.store.session(&id).await? {
@@ -139,7 +171,13 @@ impl Hub {
                 trainer_token: &token,
             })
             .await?;
-        self.start(row.clone(), plan).await?;
+        if self.store.is_shared() {
+            // Whichever server has a free slot runs it: this one first, if it has one.
+            self.claim_once().await;
+            self.claim_now.notify_one();
+        } else {
+            self.start(row.clone(), plan).await?;
+        }
         Ok(row)
     }
 
@@ -200,6 +238,18 @@ impl Hub {
         let handle = self.session(id).filter(|h| h.status().is_active());
         match handle {
             Some(h) if h.stop().await => Ok(()),
+            // PostgreSQL: queued and claimed by no server yet. (A session another server runs
+            // is stopped there; reaching it from here is the later LISTEN/NOTIFY work.)
+            None if self
+                .store
+                .stop_unclaimed(id, "stopped while queued")
+                .await? =>
+            {
+                Ok(())
+            }
+            None if self.store.is_shared() && row.status.is_active() => Err(HubError::Conflict(
+                format!("session {id} runs on another server sharing this database: stop it there"),
+            )),
             _ => Err(HubError::Conflict(format!(
                 "session {id} is {}, not running",
                 self.status_of(&row).as_str()
@@ -223,7 +273,17 @@ impl Hub {
             )));
         }
         let plan = plan_of(&row)?;
-        self.start(row, plan).await?;
+        if self.store.is_shared() {
+            if !self.store.requeue(id).await? {
+                return Err(HubError::Conflict(format!(
+                    "session {id} is no longer resumable"
+                )));
+            }
+            self.claim_once().await;
+            self.claim_now.notify_one();
+        } else {
+            self.start(row, plan).await?;
+        }
         let row = self
             .store
             .session(id)

@@ -190,6 +190,8 @@ impl Owner {
                         let _ = reply.send(());
                         return self.forget();
                     }
+                    // Another server has it now: it was never started here.
+                    Some(Command::Lost) => return self.forget(),
                     Some(command) => self.command(command).await,
                     None => return,
                 },
@@ -220,11 +222,33 @@ impl Owner {
                     Some(event) => self.apply(event, events.is_empty()).await,
                     None => break,
                 },
-                Some(command) = commands.recv() => self.command(command).await,
+                Some(command) = commands.recv() => match command {
+                    Command::Lost => return self.lose(events).await,
+                    command => self.command(command).await,
+                },
                 () = sleep_until(deadline), if deadline.is_some() => self.expire_due().await,
             }
         }
         self.finish().await;
+    }
+
+    /// The lease is gone (PostgreSQL): another server runs the session from its stored state.
+    /// The thread is told to end, and its events are drained unapplied: this copy writes
+    /// nothing more, neither answers nor checkpoints nor its end. Browsers here hear `ended`.
+    async fn lose(mut self, mut events: UnboundedReceiver<SessionEvent>) {
+        tracing::warn!(session = %self.id, "lease lost: another server runs this session now");
+        if let Some(control) = self.control.take() {
+            let _ = control.send(Control::Shutdown);
+        }
+        self.batch.clear();
+        self.pending = None;
+        self.reopened = None;
+        self.status = Status::Interrupted;
+        self.reason = Some("another server took this session over".into());
+        self.publish();
+        self.broadcast_ended();
+        self.forget();
+        while events.recv().await.is_some() {}
     }
 
     async fn command(&mut self, command: Command) {
@@ -259,6 +283,8 @@ impl Owner {
                     let _ = control.send(Control::Shutdown);
                 }
             }
+            // Taken in `run` and `serve`, where the owner can end.
+            Command::Lost => {}
         }
     }
 

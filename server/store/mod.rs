@@ -23,7 +23,9 @@
 //! `BLOB` is `BYTEA`, a 0/1 flag is `BOOLEAN`, and the two tables the store reads in insertion
 //! order (SQLite's implicit `rowid`) have an explicit identity column of that name.
 //!
-//! Checkpoint files and recordings stay in the data dir on either database.
+//! Checkpoint files and recordings stay in the data dir on either database; on PostgreSQL a
+//! remote session's resume checkpoint is in the database too, for the server that takes the
+//! session over (`leases`, docs/serving-several.md).
 //!
 //! - `sessions`: launch config, status, progress.
 //! - `queries`: what was asked (kind, step, abstract state, payload) and the answers given.
@@ -32,6 +34,8 @@
 //! - `answer_revisions`: undos and the answers given after them.
 //! - `episodes`: finished episodes' metrics.
 //! - `checkpoints`: where a session was, and the learner's digest.
+//! - `leases` (PostgreSQL): which server runs a session and until when; remote sessions'
+//!   resume checkpoints (`session_resumes`).
 //! - `datasets`: answered queries with what the learner saw, for Parquet exports.
 //! - `surveys`: the trainer's answers to the paper's three questions.
 //! - `trainers`: named trainers, each one's own answers (sessions that combine several per
@@ -86,6 +90,7 @@ mod clock;
 mod columns;
 mod datasets;
 mod episodes;
+mod leases;
 mod queries;
 mod revisions;
 mod sessions;

@@ -109,7 +109,7 @@ impl SessionRow {
         })
     }
 
-    fn from_row(r: &impl StoreRow) -> Self {
+    pub(super) fn from_row(r: &impl StoreRow) -> Self {
         let status: String = r.get("status");
         Self {
             id: r.get("id"),
