@@ -32,8 +32,11 @@ pub struct ParticipantView {
     pub title: String,
     pub consent: String,
     pub survey: Vec<Question>,
-    /// The conditions in this participant's order.
+    /// The conditions in this participant's order (their names, which the survey names).
     pub ordering: Vec<String>,
+    /// What the participant's page shows for each of them: the conditions' labels ("Method A",
+    /// ... unless the study gives its own), never the method's name.
+    pub labels: Vec<String>,
     pub step: Step,
     /// The session to train in now (step `training`): its trainer page, status, and how many
     /// sessions wait for a slot before it.
@@ -112,6 +115,7 @@ async fn view(
         consent: spec.consent.clone(),
         survey: spec.survey.clone(),
         ordering: p.ordering.clone(),
+        labels: p.ordering.iter().map(|name| spec.label_of(name)).collect(),
         step,
         training,
     })

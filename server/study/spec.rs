@@ -19,8 +19,13 @@ use super::{DesignError, Ordering, StudyDesign};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Condition {
-    /// How results and pages name it (e.g. `dref`, `ef-50`, `sac`); unique within the study.
+    /// How results and the researcher's pages name it (e.g. `dref`, `ef-50`, `sac`); unique
+    /// within the study.
     pub name: String,
+    /// What participants see instead of the name, so that a method's name cannot sway them
+    /// [default: "Method A", "Method B", ... in the study's order].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub label: Option<String>,
     pub task: Task,
     #[schema(value_type = String, example = "dref")]
     pub method: SessionMethod,
@@ -156,6 +161,8 @@ pub enum StudySpecError {
     Design(#[from] DesignError),
     #[error("conditions[{index}].name: must not be empty")]
     EmptyConditionName { index: usize },
+    #[error("conditions[{index}].label: must not be empty")]
+    EmptyConditionLabel { index: usize },
     #[error(
         "conditions: all must have the same kind of budget, but {evaluative:?} counts steps and {preference:?} queries"
     )]
@@ -190,6 +197,9 @@ impl StudySpec {
         for (index, c) in self.conditions.iter().enumerate() {
             if c.name.trim().is_empty() {
                 return Err(StudySpecError::EmptyConditionName { index });
+            }
+            if c.label.as_ref().is_some_and(|l| l.trim().is_empty()) {
+                return Err(StudySpecError::EmptyConditionLabel { index });
             }
             c.settings(index)?;
         }
@@ -261,6 +271,21 @@ impl StudySpec {
             conditions: self.conditions.iter().map(|c| c.name.clone()).collect(),
             ordering: self.ordering,
             seed: self.seed,
+        }
+    }
+
+    /// What participants see for the condition named `name` (its label, or "Method A", "Method
+    /// B", ... by its place in the study); the name itself for a condition not in the study.
+    pub fn label_of(&self, name: &str) -> String {
+        match self.conditions.iter().position(|c| c.name == name) {
+            Some(i) => self.conditions[i].label.clone().unwrap_or_else(|| {
+                // Past Z, "Method 27", "Method 28", ...: studies rarely have more than a handful.
+                match u8::try_from(i).ok().filter(|&i| i < 26) {
+                    Some(i) => format!("Method {}", char::from(b'A' + i)),
+                    None => format!("Method {}", i + 1),
+                }
+            }),
+            None => name.to_string(),
         }
     }
 
@@ -341,6 +366,7 @@ mod tests {
         assert!(s.survey.iter().all(|q| q.points == 5));
         assert_eq!(s.contrast(), ["dref", "ef-50"]);
         assert_eq!(s.consent, DEFAULT_CONSENT);
+        assert_eq!(s.label_of("ef-50"), "Method B");
         let session = s.session_spec(1, 4).unwrap();
         assert_eq!(session.budget, 3000);
         assert_eq!(session.trainer, TrainerKind::Human);
@@ -348,6 +374,21 @@ mod tests {
         // One seed per participant, the same in every condition.
         assert_eq!(session.seed, s.session_spec(0, 4).unwrap().seed);
         assert_ne!(session.seed, s.session_spec(0, 5).unwrap().seed);
+    }
+
+    #[test]
+    fn participants_see_a_conditions_label_not_its_name() {
+        let mut v = figure4();
+        v["conditions"][2]["label"] = json!("The blue robot");
+        let s = spec(v).unwrap();
+        assert_eq!(s.label_of("dref"), "Method A");
+        assert_eq!(s.label_of("sac"), "The blue robot");
+        v = figure4();
+        v["conditions"][0]["label"] = json!("  ");
+        assert_eq!(
+            spec(v).unwrap_err(),
+            "conditions[0].label: must not be empty"
+        );
     }
 
     #[test]

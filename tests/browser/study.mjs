@@ -130,6 +130,8 @@ await run("study", async (browser) => {
     check(token, `participant ${index}: the page moved to a link of their own (${page.url()})`);
     check((await page.evaluate((k) => localStorage.getItem(k), `dualrep.study.${link}`)) === token, "the token is kept in this browser");
     const view = await participantView(link, token);
+    const labels = await page.locator("#conditions li .name").allTextContents();
+    check(JSON.stringify(labels) === JSON.stringify(view.labels) && labels.every((l) => /^Method [ABC]$/.test(l)), `participants see labels, not method names: ${labels}`);
     const shown = await page.locator("#conditions li").evaluateAll((els) => els.map((e) => e.dataset.condition));
     check(JSON.stringify(shown) === JSON.stringify(view.ordering), `the page shows the participant's order ${shown} = ${view.ordering}`);
     check((await page.locator("#consent-text").textContent()) === view.consent, "the consent text is shown");
@@ -160,6 +162,9 @@ await run("study", async (browser) => {
       await page.click("#train-link");
       await page.waitForURL(/\/train\//);
       check(new URL(page.url()).searchParams.get("next") === own.pathname + own.search, "next= arrives on the trainer page");
+      await page.waitForFunction(() => document.getElementById("title").textContent !== "Teach the robot");
+      const heading = await page.locator("#title").textContent();
+      check(!heading.toLowerCase().includes(condition), `the trainer page does not name the method: ${heading}`);
 
       // The first participant reloads mid-condition in EF-50 (it asks on half the steps): the
       // trainer page, then the study page from the bare study link; the same session goes on.
@@ -194,7 +199,8 @@ await run("study", async (browser) => {
       await page.click("#continue");
 
       await step(page, "survey");
-      check((await page.locator("#survey-title").textContent()).includes(condition), `the survey names ${condition}`);
+      const title = await page.locator("#survey-title").textContent();
+      check(title.includes(view.labels[position]) && !title.includes(condition), `the survey names ${view.labels[position]}, not ${condition}: ${title}`);
       check(await page.locator("#ended-early").isHidden(), "the session ran to its end");
       const questions = await page.locator("#survey-form fieldset").evaluateAll((els) => els.map((e) => e.dataset.question));
       check(JSON.stringify(questions) === JSON.stringify(view.survey.map((q) => q.id)), `every question is asked: ${questions}`);

@@ -76,8 +76,13 @@ function nameAt(view, position) {
   return view.ordering[position] ?? "";
 }
 
+// What the participant sees: the condition's label, never the method's name.
+function labelAt(view, position) {
+  return view.labels?.[position] ?? `Session ${position + 1}`;
+}
+
 function sessionWords(view, position) {
-  return `Session ${position + 1} of ${view.ordering.length}: ${nameAt(view, position)}`;
+  return `Session ${position + 1} of ${view.ordering.length}: ${labelAt(view, position)}`;
 }
 
 function showPlan(view) {
@@ -90,7 +95,7 @@ function showPlan(view) {
       li.dataset.position = String(i);
       const state = step.step === "consent" ? "todo" : i < current ? "done" : i === current ? "current" : "todo";
       li.className = state;
-      const label = Object.assign(document.createElement("span"), { className: "name", textContent: name });
+      const label = Object.assign(document.createElement("span"), { className: "name", textContent: labelAt(view, i) });
       const note = Object.assign(document.createElement("span"), {
         className: "note muted small",
         textContent: { done: "done", current: "now", todo: "" }[state],

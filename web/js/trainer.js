@@ -309,7 +309,8 @@ function onMessage(msg) {
       {
         // A remote env's own task is called by its env's id, once the session has one.
         const name = msg.task === "remote" && msg.geometry?.env ? msg.geometry.env : TASK_NAMES[msg.task] ?? msg.task;
-        $("title").textContent = `${name} · ${msg.method.toUpperCase()}`;
+        // A study's participant is not told the method, so that its name cannot sway them.
+        $("title").textContent = NEXT ? name : `${name} · ${msg.method.toUpperCase()}`;
         document.title = `${name} · Teach the robot`;
       }
       setPill($("status"), msg.status, msg.status);
