@@ -124,15 +124,9 @@ async fn view(
 async fn training(state: &AppState, session_id: &str) -> ApiResult<Training> {
     let row = super::trainers::session_row(state, session_id).await?;
     let status = state.hub.status_of(&row);
+    // A count in the database, not a read of every session: the page asks every second or two.
     let queued_ahead = if status == Status::Queued {
-        let all = state.store.sessions().await?;
-        all.iter()
-            .filter(|s| {
-                state.hub.status_of(s) == Status::Queued
-                    && (s.created_at.as_str(), s.id.as_str())
-                        < (row.created_at.as_str(), row.id.as_str())
-            })
-            .count()
+        usize::try_from(state.store.queued_before(&row).await?).unwrap_or(0)
     } else {
         0
     };
@@ -234,6 +228,7 @@ pub async fn start(
     Path((link, token)): Path<(String, String)>,
 ) -> ApiResult<Json<ParticipantView>> {
     let (_, spec, p) = participant(&state, &link, &token).await?;
+    // One launch at a time in this process; across servers the position's unique row decides.
     let _one_at_a_time = state.study_launches.lock().await;
     let sessions = state.store.participant_sessions(&p.id).await?;
     match step_of(&state, &p, &sessions).await? {
@@ -250,7 +245,7 @@ pub async fn start(
                 .session_spec(index, p.number as usize)
                 .map_err(|e| ApiError::InvalidSession(e.to_string()))?;
             let row = state.hub.launch(session).await?;
-            state
+            let linked = state
                 .store
                 .link_study_session(&StudySessionRow {
                     participant_id: p.id.clone(),
@@ -259,6 +254,11 @@ pub async fn start(
                     session_id: row.id.clone(),
                 })
                 .await?;
+            if !linked {
+                // Another server (several share one PostgreSQL; the lock above is this
+                // process's only) launched this position first: its session is the one.
+                state.hub.stop(&row.id).await?;
+            }
         }
         Step::Training { .. } => {}
         Step::Consent => {

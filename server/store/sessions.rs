@@ -189,6 +189,19 @@ impl Store {
         .collect()))
     }
 
+    /// Sessions stored as `queued` that were launched before `row` (the places ahead of it in
+    /// the queue for a slot).
+    pub async fn queued_before(&self, row: &SessionRow) -> Result<i64> {
+        on_db!(self.db, reader, |pool| sqlx::query_scalar(
+            "SELECT COUNT(*) FROM sessions WHERE status = 'queued'
+             AND (created_at < $1 OR (created_at = $1 AND id < $2))"
+        )
+        .bind(&row.created_at)
+        .bind(&row.id)
+        .fetch_one(pool)
+        .await)
+    }
+
     /// Set the status (and the reason for `failed`); terminal states stamp `ended_at`, a start
     /// stamps `started_at` once.
     pub async fn set_status(&self, id: &str, status: Status, reason: Option<&str>) -> Result<()> {
