@@ -26,6 +26,7 @@ mod serving_several;
 mod session_recording;
 mod slurm;
 mod store;
+mod store_people;
 mod studies;
 mod study_pilot;
 mod train_e2e;

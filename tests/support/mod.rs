@@ -10,4 +10,5 @@ pub mod rerun_py;
 pub mod rest;
 pub mod server;
 pub mod slurm_cluster;
+pub mod store_backends;
 pub mod trainer;
