@@ -99,7 +99,7 @@ pub struct QueryMessage {
 }
 
 /// Where the session stands.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct ProgressMessage {
     /// Queries answered so far (by anyone, timeouts included).
     pub answered: u64,
@@ -107,7 +107,7 @@ pub struct ProgressMessage {
     pub progress: u64,
     pub budget: u64,
     /// `steps` or `queries`.
-    pub unit: &'static str,
+    pub unit: std::borrow::Cow<'static, str>,
     /// Share of steps with feedback (evaluative sessions).
     pub feedback_fraction: f64,
     /// Returns of the latest finished episodes, oldest first (evaluative sessions).
@@ -122,7 +122,7 @@ pub struct ProgressMessage {
 
 /// A query rule's pacing as a person feels it (docs/dref.md): floods of consecutive queries,
 /// and silences while the robot keeps failing ("frozen").
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct RulePacing {
     /// Finished episodes.
     pub episodes: u64,
@@ -234,7 +234,7 @@ pub enum ErrorCode {
 }
 
 /// Why a client message was refused.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct ProtocolError {
     pub code: ErrorCode,
     pub message: String,

@@ -113,7 +113,10 @@ impl Server {
         let grace = self.grace;
         let drain = async move {
             shutdown.await;
-            tracing::info!("shutting down: sessions checkpoint and end as interrupted");
+            tracing::info!(
+                "shutting down: sessions checkpoint and end as interrupted (on PostgreSQL: go to \
+                 the other servers)"
+            );
             hub.shutdown(grace).await;
         };
         // Answers and acks are small messages: without TCP_NODELAY, Nagle's algorithm and the

@@ -22,6 +22,7 @@ mod report;
 mod reproduce;
 mod sac_settings;
 mod security_headers;
+mod serving_proxy;
 mod serving_several;
 mod session_recording;
 mod slurm;

@@ -27,6 +27,8 @@ have slurmd || missing+=(slurmd)
 have sbatch || missing+=(slurm-client)
 # Debian keeps initdb and postgres off PATH, under /usr/lib/postgresql/<version>/bin.
 compgen -G '/usr/lib/postgresql/*/bin/initdb' >/dev/null || missing+=(postgresql)
+# The proxy in front of several servers (tests/serving_proxy.rs); Debian keeps it in /usr/sbin.
+[ -x /usr/sbin/nginx ] || have nginx || missing+=(nginx)
 # `python3 -m venv` needs ensurepip, which Debian ships apart in python3-venv.
 python3 -c 'import ensurepip, venv' 2>/dev/null || missing+=(python3-venv)
 

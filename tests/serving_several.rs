@@ -3,45 +3,17 @@
 //! with SIGKILL another takes its sessions over within the lease bound and finishes them,
 //! without asking any query twice.
 
-use std::collections::{HashMap, HashSet};
-use std::process::{Child, Stdio};
 use std::time::{Duration, Instant};
 
-use serde_json::{Value, json};
+use serde_json::json;
 use sqlx::{Connection, Row};
 
-use crate::support::binary::start_serve;
 use crate::support::postgres;
-use crate::support::server::{Api, TOKEN};
+use crate::support::server::Api;
+use crate::support::shared_db::{BOUND, asked_once, finishes, owners, start, wait_for};
 
-/// The lease (6 s) plus the claim period (1 s): `server/hub/leases.rs`.
-const BOUND: Duration = Duration::from_secs(7);
 /// Synthetic EF-50 sessions long enough to be mid-run when a server is killed.
 const STEPS: u64 = 4000;
-
-fn start(data: &std::path::Path, url: &str, max: &str) -> (Child, Api) {
-    let (child, base) = start_serve(
-        data,
-        TOKEN,
-        &["--database", url, "--max-sessions", max],
-        Stdio::null(),
-    );
-    (
-        child,
-        Api::new(base.trim_start_matches("http://").parse().unwrap()),
-    )
-}
-
-/// `(id -> (status, owner))` of every session, from the database.
-async fn owners(db: &mut sqlx::PgConnection) -> HashMap<String, (String, Option<String>)> {
-    sqlx::query("SELECT id, status, owner FROM sessions")
-        .fetch_all(db)
-        .await
-        .unwrap()
-        .iter()
-        .map(|r| (r.get("id"), (r.get("status"), r.get("owner"))))
-        .collect()
-}
 
 /// Launch a synthetic session on `api`'s server; its id.
 async fn launch(api: &Api, seed: u64) -> String {
@@ -56,58 +28,6 @@ async fn launch(api: &Api, seed: u64) -> String {
         .await;
     assert_eq!(status, 201, "{r}");
     r["id"].as_str().unwrap().to_string()
-}
-
-/// Every answer of session `id` (read through `api`) is to a different query, and every query
-/// stored for it has its one answer.
-async fn asked_once(api: &Api, db: &mut sqlx::PgConnection, id: &str) {
-    let answers: Value = api.get(&format!("/api/sessions/{id}/answers")).await;
-    let answers = answers.as_array().unwrap();
-    let seqs: HashSet<i64> = answers
-        .iter()
-        .map(|a| a["query_id"].as_i64().unwrap())
-        .collect();
-    assert_eq!(seqs.len(), answers.len(), "a query asked twice in {id}");
-    assert!(!answers.is_empty(), "{id} asked nothing");
-    let queries: i64 = sqlx::query("SELECT COUNT(*) AS n FROM queries WHERE session_id = $1")
-        .bind(id)
-        .fetch_one(db)
-        .await
-        .unwrap()
-        .get("n");
-    assert_eq!(
-        queries as usize,
-        answers.len(),
-        "{id}: every query answered once"
-    );
-}
-
-/// Wait until session `id` has finished (read through `api`), failing on any other end.
-async fn finishes(api: &Api, id: &str) {
-    wait_for(
-        &format!("{id} finishes"),
-        Duration::from_secs(300),
-        async || {
-            let v = api.get(&format!("/api/sessions/{id}")).await;
-            assert!(
-                !["failed", "stopped", "interrupted"].contains(&v["status"].as_str().unwrap()),
-                "{v}"
-            );
-            (v["status"] == "finished").then_some(())
-        },
-    )
-    .await;
-}
-
-async fn wait_for<T>(what: &str, within: Duration, mut check: impl AsyncFnMut() -> Option<T>) -> T {
-    let start = Instant::now();
-    loop {
-        if let Some(t) = check().await {
-            return t;
-        }
-        assert!(start.elapsed() < within, "{what} within {within:?}");
-        tokio::time::sleep(Duration::from_millis(50)).await;
-    }
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -155,8 +75,7 @@ async fn a_killed_servers_session_is_taken_over_and_finishes_on_another() {
 
     // SIGKILL A: B takes over one of its sessions within the bound (the other when a slot of
     // B's frees up).
-    a.kill().unwrap();
-    a.wait().unwrap();
+    a.kill();
     let killed = Instant::now();
     let taken = wait_for("B takes a session of A's over", BOUND * 2, async || {
         let o = owners(&mut db).await;
@@ -181,8 +100,7 @@ async fn a_killed_servers_session_is_taken_over_and_finishes_on_another() {
     }
     let o = owners(&mut db).await;
     assert_eq!(o[&taken].1.as_deref(), Some(server_b.as_str()));
-    b.kill().unwrap();
-    b.wait().unwrap();
+    b.kill();
 }
 
 /// A server that finds its lease taken (the `owner` column changed under it) ends its copy
@@ -247,6 +165,53 @@ async fn a_server_whose_lease_is_taken_stops_its_copy_and_the_session_resumes() 
     );
     finishes(&api, &id).await;
     asked_once(&api, &mut db, &id).await;
-    server.kill().unwrap();
-    server.wait().unwrap();
+    server.kill();
+}
+
+/// A graceful shutdown (SIGTERM) on PostgreSQL hands the server's sessions over: it stops its
+/// copies, releases their leases and exits, and another server claims them at its next look
+/// (within a second, not the lease's 6 s) and finishes them, every query asked once.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_server_shut_down_gracefully_hands_its_sessions_over_at_once() {
+    let Some(pg) = postgres::database().await else {
+        return;
+    };
+    let mut db = sqlx::PgConnection::connect(&pg.url).await.unwrap();
+    let (dir_a, dir_b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let (mut a, api_a) = start(dir_a.path(), &pg.url, "2");
+    let ids = vec![launch(&api_a, 5).await, launch(&api_a, 6).await];
+    let server_a = wait_for("A runs both", Duration::from_secs(30), async || {
+        let o = owners(&mut db).await;
+        let running: Vec<_> = o.values().filter(|(s, _)| s == "running").collect();
+        (running.len() == 2).then(|| running[0].1.clone().unwrap())
+    })
+    .await;
+    let (mut b, api_b) = start(dir_b.path(), &pg.url, "2");
+    let asked = Instant::now();
+    let status = a.terminate();
+    let exited = asked.elapsed();
+    assert!(status.success(), "A exits cleanly: {status:?}");
+    wait_for("B claims both", Duration::from_secs(5), async || {
+        let o = owners(&mut db).await;
+        ids.iter()
+            .all(|id| o[id].1.as_deref().is_some_and(|owner| owner != server_a))
+            .then_some(())
+    })
+    .await;
+    let handed = asked.elapsed();
+    println!(
+        "graceful handover: A exited {:.2} s after SIGTERM; B held both of its sessions {:.2} s \
+         after it (a kill waits for the lease: up to {BOUND:?})",
+        exited.as_secs_f64(),
+        handed.as_secs_f64()
+    );
+    assert!(
+        handed < BOUND,
+        "handed over in {handed:?}, no faster than a kill"
+    );
+    for id in &ids {
+        finishes(&api_b, id).await;
+        asked_once(&api_b, &mut db, id).await;
+    }
+    b.kill();
 }

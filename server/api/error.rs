@@ -31,6 +31,10 @@ pub enum ApiError {
     InvalidSession(String),
     #[error("request bodies are limited to {0} bytes")]
     PayloadTooLarge(usize),
+    /// The session runs on no server at this moment (PostgreSQL: queued for a free slot, or
+    /// its server stopped and another has not taken it over yet): try again shortly.
+    #[error("{0}")]
+    Moving(String),
     /// The database does not answer (`/healthz`).
     #[error("the database does not answer: {0}")]
     Unhealthy(String),
@@ -52,7 +56,7 @@ impl ApiError {
             ApiError::Conflict(_) => StatusCode::CONFLICT,
             ApiError::InvalidSession(_) => StatusCode::UNPROCESSABLE_ENTITY,
             ApiError::PayloadTooLarge(_) => StatusCode::PAYLOAD_TOO_LARGE,
-            ApiError::Unhealthy(_) => StatusCode::SERVICE_UNAVAILABLE,
+            ApiError::Unhealthy(_) | ApiError::Moving(_) => StatusCode::SERVICE_UNAVAILABLE,
             ApiError::ExportFailed(_) | ApiError::Store(_) => StatusCode::INTERNAL_SERVER_ERROR,
         }
     }
@@ -67,6 +71,7 @@ impl ApiError {
             ApiError::Conflict(_) => "conflict",
             ApiError::InvalidSession(_) => "invalid_session",
             ApiError::PayloadTooLarge(_) => "payload_too_large",
+            ApiError::Moving(_) => "moving",
             ApiError::Unhealthy(_) => "unhealthy",
             ApiError::ExportFailed(_) => "export_failed",
             ApiError::Store(_) => "store_failed",
@@ -74,7 +79,7 @@ impl ApiError {
     }
 
     /// Every code, for the OpenAPI document.
-    pub const CODES: [&'static str; 10] = [
+    pub const CODES: [&'static str; 11] = [
         "bad_request",
         "unauthorized",
         "forbidden",
@@ -82,6 +87,7 @@ impl ApiError {
         "conflict",
         "invalid_session",
         "payload_too_large",
+        "moving",
         "unhealthy",
         "export_failed",
         "store_failed",
@@ -143,7 +149,8 @@ pub struct ErrorBody {
 #[allow(dead_code)]
 pub struct ErrorDetail {
     /// A stable code clients match on: bad_request, unauthorized, forbidden, not_found,
-    /// conflict, invalid_session, payload_too_large, unhealthy, export_failed, store_failed.
+    /// conflict, invalid_session, payload_too_large, moving, unhealthy, export_failed,
+    /// store_failed.
     #[schema(example = "invalid_session")]
     code: String,
     message: String,
@@ -163,6 +170,7 @@ mod tests {
             ApiError::Conflict(String::new()),
             ApiError::InvalidSession(String::new()),
             ApiError::PayloadTooLarge(1),
+            ApiError::Moving(String::new()),
             ApiError::Unhealthy(String::new()),
             ApiError::ExportFailed(String::new()),
             ApiError::Store(sqlx::Error::PoolClosed),

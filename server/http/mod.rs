@@ -164,13 +164,15 @@ async fn api_not_found() -> ApiError {
     tag = "service",
     security(()),
     responses(
-        (status = 200, description = "Healthy: `{\"status\": \"ok\"}`", body = Object),
+        (status = 200, description = "Healthy: `{\"status\": \"ok\", \"server\": \"<id>\"}` (which server answered: one of several behind a proxy, docs/serving-several.md)", body = Object),
         (status = 503, description = "The database does not answer", body = ErrorBody)
     )
 )]
 async fn healthz(State(state): State<AppState>) -> Response {
     match state.store.ping().await {
-        Ok(()) => Json(serde_json::json!({"status": "ok"})).into_response(),
+        Ok(()) => {
+            Json(serde_json::json!({"status": "ok", "server": state.hub.server_id})).into_response()
+        }
         Err(e) => ApiError::Unhealthy(e.to_string()).into_response(),
     }
 }

@@ -4,6 +4,8 @@
 
 use std::sync::Arc;
 
+use serde::{Deserialize, Serialize};
+
 use tokio::sync::{broadcast, mpsc, oneshot, watch};
 
 use crate::protocol::{ProgressMessage, ProtocolError, QueryId};
@@ -13,7 +15,7 @@ use crate::store::{Status, TrainerRef};
 
 /// Who is on the other end of a socket (or a route): a researcher, a trainer on the session's
 /// shared link without a name, or a named trainer.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Identity {
     Researcher,
     Anonymous,
@@ -59,6 +61,15 @@ pub(super) enum Command {
         who: Identity,
         reply: oneshot::Sender<Result<(), ProtocolError>>,
     },
+    /// A browser on another server joins (PostgreSQL, `bus`): the owner sends that server the
+    /// catch-up, then every broadcast after it, in order, until it leaves.
+    RemoteJoin {
+        who: Identity,
+        server: String,
+        req: u64,
+    },
+    /// That server has no browser of the session left.
+    Leave { server: String },
     /// A researcher stops the session (queued or running).
     Stop(oneshot::Sender<()>),
     /// The server shuts down: checkpoint and end as interrupted.
@@ -77,14 +88,14 @@ pub struct Joined {
 }
 
 /// What a trainer's answer got.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum AnswerReply {
     Ack(AnswerValue),
     Refused(ProtocolError),
 }
 
 /// The session's state as the owner last published it, for HTTP views and `hello`.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Snapshot {
     pub status: Status,
     pub reason: Option<String>,
@@ -124,39 +135,65 @@ impl SessionHandle {
 
     /// `who` answers query `id`; the reply comes after the answer is committed (or refused).
     pub async fn answer(&self, id: QueryId, value: AnswerValue, who: &Identity) -> AnswerReply {
-        let (reply, answer) = oneshot::channel();
-        let who = who.clone();
-        if self
-            .commands
-            .send(Command::Answer {
-                id,
-                value,
-                who,
-                reply,
-            })
-            .is_err()
-        {
-            return AnswerReply::Refused(ProtocolError::session_ended());
-        }
-        answer
+        self.send_answer(id, value, who.clone())
             .await
             .unwrap_or(AnswerReply::Refused(ProtocolError::session_ended()))
     }
 
+    /// Hand the owner an answer now; its reply comes on the returned channel (closed: the
+    /// session has ended). Commands sent one after another reach the owner in that order.
+    pub(super) fn send_answer(
+        &self,
+        id: QueryId,
+        value: AnswerValue,
+        who: Identity,
+    ) -> oneshot::Receiver<AnswerReply> {
+        let (reply, answer) = oneshot::channel();
+        let _ = self.commands.send(Command::Answer {
+            id,
+            value,
+            who,
+            reply,
+        });
+        answer
+    }
+
     /// `who` takes back the answer to query `id`.
     pub async fn undo(&self, id: QueryId, who: &Identity) -> Result<(), ProtocolError> {
+        self.send_undo(id, who.clone())
+            .await
+            .map_err(|_| ProtocolError::session_ended())?
+    }
+
+    pub(super) fn send_undo(
+        &self,
+        id: QueryId,
+        who: Identity,
+    ) -> oneshot::Receiver<Result<(), ProtocolError>> {
         let (reply, answer) = oneshot::channel();
-        let who = who.clone();
-        self.commands
-            .send(Command::Undo { id, who, reply })
-            .map_err(|_| ProtocolError::session_ended())?;
-        answer.await.map_err(|_| ProtocolError::session_ended())?
+        let _ = self.commands.send(Command::Undo { id, who, reply });
+        answer
     }
 
     /// Ask the owner to stop the session; `false` if it had already gone.
     pub(super) async fn stop(&self) -> bool {
+        self.send_stop().await.is_ok()
+    }
+
+    pub(super) fn send_stop(&self) -> oneshot::Receiver<()> {
         let (reply, answer) = oneshot::channel();
-        self.commands.send(Command::Stop(reply)).is_ok() && answer.await.is_ok()
+        let _ = self.commands.send(Command::Stop(reply));
+        answer
+    }
+
+    /// A browser on `server` joins as `who`; the owner replies to `req` through the bus.
+    pub(super) fn remote_join(&self, who: Identity, server: String, req: u64) {
+        let _ = self.commands.send(Command::RemoteJoin { who, server, req });
+    }
+
+    /// `server` has no browser of the session left.
+    pub(super) fn leave(&self, server: String) {
+        let _ = self.commands.send(Command::Leave { server });
     }
 
     pub(super) fn shutdown(&self) {

@@ -115,7 +115,7 @@ impl Hub {
                 *last_ok = Instant::now();
                 for id in held.iter().filter(|id| !kept.contains(id)) {
                     tracing::warn!(session = %id, "another server owns this session now");
-                    if let Some(h) = self.session(id) {
+                    if let Some(h) = self.owned(id) {
                         h.lost();
                     }
                 }
@@ -125,7 +125,7 @@ impl Hub {
                 if last_ok.elapsed() >= GIVE_UP_AFTER {
                     for id in &held {
                         tracing::warn!(session = %id, "giving up: its lease could not be renewed");
-                        if let Some(h) = self.session(id) {
+                        if let Some(h) = self.owned(id) {
                             h.lost();
                         }
                     }
@@ -144,7 +144,10 @@ impl Hub {
         while !self.slots.is_closed() {
             tokio::select! {
                 _ = renew.tick() => self.renew(&mut last_ok).await,
-                _ = claim.tick() => self.claim_once().await,
+                _ = claim.tick() => {
+                    self.claim_once().await;
+                    self.check_relays().await;
+                }
                 () = self.claim_now.notified() => self.claim_once().await,
             }
         }

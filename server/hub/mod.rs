@@ -14,14 +14,18 @@
 //! - `episode_frames`: the frames kept for replay.
 //! - `leases`: on PostgreSQL, several servers share the sessions: each claims sessions for its
 //!   free slots and holds them under a lease it renews (docs/serving-several.md).
+//! - `bus`: there, what servers say to each other through the database (LISTEN/NOTIFY);
+//!   `relay`: a session another server runs, as this server's sockets and routes reach it.
 
 mod answers;
+mod bus;
 mod episode_frames;
 mod events;
 mod handle;
 mod leases;
 mod owner;
 mod recording;
+mod relay;
 mod remote;
 mod sink;
 mod thread;
@@ -29,7 +33,7 @@ mod votes;
 
 use std::collections::HashMap;
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Duration;
 
 use rand::Rng;
@@ -37,8 +41,10 @@ use tokio::sync::Semaphore;
 use tokio::task::JoinHandle;
 
 pub use answers::UNDO_WINDOW;
+pub use bus::ASK_TIMEOUT;
 pub use handle::{AnswerReply, Identity, Joined, SessionHandle, Snapshot};
 pub use leases::{CLAIM_EVERY, LEASE};
+pub use relay::Reach;
 
 use crate::session::{PlanError, SessionPlan, SessionSpec};
 use crate::store::{NewSession, SessionRow, Status, Store, StoredSpecError};
@@ -72,6 +78,12 @@ pub struct Hub {
     claim_now: tokio::sync::Notify,
     /// One claim at a time (the loop's, a launch's), so that free slots are counted once.
     claiming: tokio::sync::Mutex<()>,
+    /// The way to the other servers of one PostgreSQL (none on SQLite).
+    bus: OnceLock<bus::Bus>,
+    /// Sessions other servers run that sockets or routes here reached.
+    relays: Mutex<HashMap<String, relay::RelayEntry>>,
+    /// The bus's listening and sending tasks, which end last.
+    bus_tasks: Mutex<Vec<JoinHandle<()>>>,
 }
 
 /// Why the hub refused.
@@ -111,6 +123,9 @@ impl Hub {
             server_id: random_hex(8),
             claim_now: tokio::sync::Notify::new(),
             claiming: tokio::sync::Mutex::new(()),
+            bus: OnceLock::new(),
+            relays: Mutex::new(HashMap::new()),
+            bus_tasks: Mutex::new(Vec::new()),
         })
     }
 
@@ -126,6 +141,9 @@ impl Hub {
                 "sharing the database with any other servers: claiming sessions under leases of {:?}",
                 leases::LEASE
             );
+            self.start_bus()
+                .await
+                .map_err(|e| HubError::Conflict(format!("listening for other servers: {e:#}")))?;
             self.claim_once().await;
             let task = tokio::spawn(self.clone().run_leases());
             self.tasks
@@ -181,8 +199,14 @@ impl Hub {
         Ok(row)
     }
 
-    /// The session's handle while the hub runs it (queued, running or waiting).
+    /// The session's handle while this server runs it (queued, running or waiting), or the
+    /// relay a socket here made to the server that runs it.
     pub fn session(&self, id: &str) -> Option<SessionHandle> {
+        self.owned(id).or_else(|| self.relay(id))
+    }
+
+    /// The session's handle while this server runs it.
+    fn owned(&self, id: &str) -> Option<SessionHandle> {
         self.sessions
             .lock()
             .unwrap_or_else(|e| e.into_inner())
@@ -229,17 +253,20 @@ impl Hub {
     }
 
     /// Stop a session for good (it can still be resumed later).
-    pub async fn stop(&self, id: &str) -> Result<(), HubError> {
+    pub async fn stop(self: &Arc<Self>, id: &str) -> Result<(), HubError> {
         let row = self
             .store
             .session(id)
             .await?
             .ok_or_else(|| HubError::NotFound(id.into()))?;
-        let handle = self.session(id).filter(|h| h.status().is_active());
+        // Its owner here, or (PostgreSQL) a relay to the server that runs it.
+        let handle = match self.reach(&row).await {
+            Reach::Live(h) => Some(h).filter(|h| h.status().is_active()),
+            Reach::Between | Reach::NotRunning => None,
+        };
         match handle {
             Some(h) if h.stop().await => Ok(()),
-            // PostgreSQL: queued and claimed by no server yet. (A session another server runs
-            // is stopped there; reaching it from here is the later LISTEN/NOTIFY work.)
+            // PostgreSQL: queued and claimed by no server yet.
             None if self
                 .store
                 .stop_unclaimed(id, "stopped while queued")
@@ -247,9 +274,12 @@ impl Hub {
             {
                 Ok(())
             }
-            None if self.store.is_shared() && row.status.is_active() => Err(HubError::Conflict(
-                format!("session {id} runs on another server sharing this database: stop it there"),
-            )),
+            _ if self.store.is_shared() && row.status.is_active() => {
+                Err(HubError::Conflict(format!(
+                    "session {id} is moving between servers (its server stopped, and another \
+                     has not taken it over yet): try again in a few seconds"
+                )))
+            }
             _ => Err(HubError::Conflict(format!(
                 "session {id} is {}, not running",
                 self.status_of(&row).as_str()
@@ -299,7 +329,13 @@ impl Hub {
 
     /// Graceful shutdown: every running session checkpoints and ends as `interrupted`; browsers
     /// get `ended`. Queued sessions stay queued for the next start.
+    ///
+    /// On PostgreSQL the server hands its sessions over instead: each copy ends as when its
+    /// lease is lost (writing nothing more; its sockets close and connect again), then the
+    /// leases are released, so that another server claims them within a second and resumes
+    /// them from what is stored, as after a kill but without waiting for the leases to run out.
     pub async fn shutdown(&self, grace: Duration) {
+        let shared = self.store.is_shared();
         self.slots.close();
         let sessions: Vec<SessionHandle> = self
             .sessions
@@ -309,8 +345,13 @@ impl Hub {
             .cloned()
             .collect();
         for session in &sessions {
-            session.shutdown();
+            if shared {
+                session.lost();
+            } else {
+                session.shutdown();
+            }
         }
+        self.relays_moved(None);
         let tasks: Vec<JoinHandle<()>> =
             std::mem::take(&mut *self.tasks.lock().unwrap_or_else(|e| e.into_inner()));
         let all = futures_util::future::join_all(tasks);
@@ -318,6 +359,19 @@ impl Hub {
             tracing::warn!(
                 "sessions did not finish within {grace:?}; they will be marked interrupted at the next start"
             );
+        }
+        if shared {
+            match self.store.release_leases(&self.server_id).await {
+                Ok(n) => tracing::info!("handed {n} session(s) over to the other servers"),
+                Err(e) => tracing::warn!(
+                    "releasing the leases: {e} (other servers take the sessions over when the leases run out)"
+                ),
+            }
+        }
+        // The last words to other servers (relays' leaves) go out; then the bus stops.
+        tokio::time::sleep(Duration::from_millis(200)).await;
+        for task in std::mem::take(&mut *self.bus_tasks.lock().unwrap_or_else(|e| e.into_inner())) {
+            task.abort();
         }
     }
 

@@ -15,6 +15,7 @@ use tokio::time::Instant;
 
 use super::Hub;
 use super::answers::Undoable;
+use super::bus::{self, Envelope, Reply};
 use super::episode_frames::EpisodeFrames;
 use super::handle::{Command, Identity, Joined, SessionHandle, Snapshot};
 use crate::protocol::{ProgressMessage, QueryId, QueryKind, ServerMessage, WithdrawReason};
@@ -107,6 +108,9 @@ pub(super) struct Owner {
     /// The running episode's frames, written to the data dir when it ends (for replay).
     pub episode_frames: EpisodeFrames,
     pub ending: Ending,
+    /// The other servers whose sockets joined (PostgreSQL): they get every broadcast and
+    /// snapshot too, through the bus, until they leave.
+    remote: Vec<String>,
 }
 
 impl Owner {
@@ -124,7 +128,7 @@ impl Owner {
         let progress = ProgressMessage {
             progress: resumed_at,
             budget: plan.spec.budget,
-            unit: plan.spec.method.budget_unit(),
+            unit: plan.spec.method.budget_unit().into(),
             ..Default::default()
         };
         let (snapshot, snapshot_rx) = watch::channel(Snapshot {
@@ -170,6 +174,7 @@ impl Owner {
             resumed_at,
             episode_frames: EpisodeFrames::default(),
             ending: Ending::Failed("the session thread ended without a word".into()),
+            remote: Vec::new(),
         };
         (owner, handle, commands_rx)
     }
@@ -234,7 +239,9 @@ impl Owner {
 
     /// The lease is gone (PostgreSQL): another server runs the session from its stored state.
     /// The thread is told to end, and its events are drained unapplied: this copy writes
-    /// nothing more, neither answers nor checkpoints nor its end. Browsers here hear `ended`.
+    /// nothing more, neither answers nor checkpoints nor its end. Browsers here hear no
+    /// `ended` (the session goes on): their sockets close and connect again, reaching the next
+    /// owner; other servers' relays hear `moved` and do the same.
     async fn lose(mut self, mut events: UnboundedReceiver<SessionEvent>) {
         tracing::warn!(session = %self.id, "lease lost: another server runs this session now");
         if let Some(control) = self.control.take() {
@@ -243,10 +250,14 @@ impl Owner {
         self.batch.clear();
         self.pending = None;
         self.reopened = None;
-        self.status = Status::Interrupted;
-        self.reason = Some("another server took this session over".into());
-        self.publish();
-        self.broadcast_ended();
+        for server in std::mem::take(&mut self.remote) {
+            self.hub.bus_send(
+                &server,
+                Envelope::Moved {
+                    session: self.id.clone(),
+                },
+            );
+        }
         self.forget();
         while events.recv().await.is_some() {}
     }
@@ -256,6 +267,19 @@ impl Owner {
             Command::Join { who, reply } => {
                 let _ = reply.send(self.join(&who));
             }
+            Command::RemoteJoin { who, server, req } => {
+                let catch_up = self.join(&who).catch_up;
+                let joined = Reply::Joined {
+                    catch_up: catch_up.iter().map(|m| m.to_string()).collect(),
+                    snapshot: Box::new(self.snapshot.borrow().clone()),
+                };
+                self.hub
+                    .bus_send(&server, bus::reply(&self.id, req, joined));
+                if !self.remote.contains(&server) {
+                    self.remote.push(server);
+                }
+            }
+            Command::Leave { server } => self.remote.retain(|s| *s != server),
             Command::Answer {
                 id,
                 value,
@@ -312,17 +336,38 @@ impl Owner {
 
     /// Publish the state HTTP views and joining sockets read.
     pub fn publish(&self) {
-        self.snapshot.send_replace(Snapshot {
+        let snapshot = Snapshot {
             status: self.status,
             reason: self.reason.clone(),
             progress: self.progress.clone(),
             geometry: self.geometry.clone(),
             graph: self.graph,
-        });
+        };
+        for server in &self.remote {
+            self.hub.bus_send(
+                server,
+                Envelope::Snapshot {
+                    session: self.id.clone(),
+                    snapshot: Box::new(snapshot.clone()),
+                },
+            );
+        }
+        self.snapshot.send_replace(snapshot);
     }
 
-    /// Send to every connected browser (none connected is fine).
+    /// Send to every connected browser (none connected is fine), here and on the servers
+    /// whose sockets joined.
     pub fn broadcast(&self, text: Arc<str>) {
+        for server in &self.remote {
+            self.hub.bus_send(
+                server,
+                Envelope::Cast {
+                    session: self.id.clone(),
+                    from: self.hub.server_id.clone(),
+                    text: text.to_string(),
+                },
+            );
+        }
         let _ = self.broadcast.send(text);
     }
 

@@ -16,8 +16,18 @@
 use std::time::Duration;
 
 use super::backend::StoreRow;
-use super::sessions::SessionRow;
+use super::sessions::{SessionRow, Status};
 use super::{Db, Result, Store};
+
+/// Who runs a session now, as the database says.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LeaseHolder {
+    pub id: String,
+    pub owner: Option<String>,
+    pub status: Status,
+    /// Whether the owner's lease still holds (by the database's clock).
+    pub live: bool,
+}
 
 impl Store {
     /// Whether several servers may share this database (PostgreSQL): sessions are claimed
@@ -89,6 +99,50 @@ impl Store {
         .iter()
         .map(|r| r.get("id"))
         .collect())
+    }
+
+    /// Who holds the sessions `ids` (those that exist), for the servers that relay to them.
+    pub async fn lease_holders(&self, ids: &[String]) -> Result<Vec<LeaseHolder>> {
+        let Db::Postgres(pool) = &self.db else {
+            return Ok(Vec::new());
+        };
+        if ids.is_empty() {
+            return Ok(Vec::new());
+        }
+        Ok(sqlx::query(
+            "SELECT id, owner, status, COALESCE(lease_until > now(), false) AS live
+             FROM sessions WHERE id = ANY($1)",
+        )
+        .bind(ids)
+        .fetch_all(pool)
+        .await?
+        .iter()
+        .map(|r| {
+            let status: String = r.get("status");
+            LeaseHolder {
+                id: r.get("id"),
+                owner: r.get("owner"),
+                status: Status::parse(&status).unwrap_or(Status::Failed),
+                live: r.get("live"),
+            }
+        })
+        .collect())
+    }
+
+    /// Let go of every session server `me` holds (a graceful shutdown): their leases end now,
+    /// and other servers claim them at their next look. Returns how many.
+    pub async fn release_leases(&self, me: &str) -> Result<u64> {
+        let Db::Postgres(pool) = &self.db else {
+            return Ok(0);
+        };
+        Ok(sqlx::query(
+            "UPDATE sessions SET lease_until = now() - interval '1 second'
+             WHERE owner = $1 AND status IN ('queued', 'running', 'waiting')",
+        )
+        .bind(me)
+        .execute(pool)
+        .await?
+        .rows_affected())
     }
 
     /// Queue a stored session again for any server to claim (a resume on PostgreSQL): no

@@ -1,12 +1,12 @@
 //! The `sessions` table.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::backend::StoreRow;
 use super::{Result, Store, clock};
 
 /// A session's lifecycle state (`status` in the API and the table).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, utoipa::ToSchema)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Status {
     Queued,

@@ -36,7 +36,7 @@ impl TrainerOrigin {
 }
 
 /// A named trainer, as answers and the API name them.
-#[derive(Clone, Debug, PartialEq, Eq, Hash, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Hash, Serialize, serde::Deserialize)]
 pub struct TrainerRef {
     pub id: i64,
     pub name: String,

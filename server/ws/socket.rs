@@ -8,14 +8,14 @@ use std::time::Instant;
 
 use axum::extract::State;
 use axum::extract::ws::rejection::WebSocketUpgradeRejection;
-use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
+use axum::extract::ws::{CloseFrame, Message, WebSocket, WebSocketUpgrade, close_code};
 use axum::response::{IntoResponse, Response};
 use tokio::sync::broadcast::error::RecvError;
 
 use crate::api::AppState;
 use crate::api::auth::SessionAccess;
 use crate::api::error::{ApiError, ErrorBody};
-use crate::hub::{AnswerReply, Identity, Joined, SessionHandle};
+use crate::hub::{AnswerReply, Identity, Joined, Reach, SessionHandle};
 use crate::protocol::{
     ClientMessage, ErrorCode, ProtocolError, QueryId, ServerMessage, id_of, parse_client,
 };
@@ -54,9 +54,23 @@ pub async fn upgrade(
             return ApiError::BadRequest(format!("not a websocket request: {e}")).into_response();
         }
     };
+    // The running session here, or on another server sharing the database (through a relay).
+    let live = match state.hub.reach(&row).await {
+        Reach::Live(h) => Some(h),
+        Reach::NotRunning => None,
+        // The browser's socket connects again after a short wait, as after any close.
+        Reach::Between => {
+            return ApiError::Moving(format!(
+                "session {} is waiting for a server (queued for a free slot, or its server \
+                 stopped and another is taking it over): connect again shortly",
+                row.id
+            ))
+            .into_response();
+        }
+    };
     // The plan the running session was started with; an ended one's, read from its row (a
     // stored session that no longer reads gets no socket, rather than a made-up `hello`).
-    let plan = match state.hub.session(&row.id) {
+    let plan = match &live {
         Some(live) => live.plan.clone(),
         None => match row.spec().map(SessionPlan::new) {
             Ok(Ok(plan)) => Arc::new(plan),
@@ -66,7 +80,7 @@ pub async fn upgrade(
     };
     ws.max_message_size(MAX_MESSAGE_BYTES)
         .max_frame_size(MAX_MESSAGE_BYTES)
-        .on_upgrade(move |socket| serve(state, row, plan, who, socket))
+        .on_upgrade(move |socket| serve(state, row, plan, live, who, socket))
 }
 
 fn text(s: &str) -> Message {
@@ -103,10 +117,10 @@ async fn serve(
     state: AppState,
     row: SessionRow,
     plan: Arc<SessionPlan>,
+    session: Option<SessionHandle>,
     who: Identity,
     mut socket: WebSocket,
 ) {
-    let session = state.hub.session(&row.id);
     let snapshot = session.as_ref().map(SessionHandle::snapshot);
     let status = snapshot.as_ref().map_or(row.status, |s| s.status);
     let live_graph = snapshot.as_ref().and_then(|s| s.graph);
@@ -133,6 +147,10 @@ async fn serve(
         },
     )) = joined
     else {
+        // It runs on, elsewhere (its server lost it while this socket joined).
+        if session.as_ref().is_some_and(|s| s.status().is_active()) {
+            return moved(socket).await;
+        }
         // Nothing runs: say so, and refuse answers until the browser goes.
         let ended = ServerMessage::Ended {
             status: state.hub.status_of(&row),
@@ -168,6 +186,9 @@ async fn serve(
                         }
                     }
                 }
+                // The session runs on, on another server (this one lost it, or the relay to
+                // the server that ran it ended): close, and the browser connects again.
+                Err(RecvError::Closed) if session.status().is_active() => return moved(socket).await,
                 // The session ended (its `ended` came last): answers are closed from here.
                 Err(RecvError::Closed) => return refuse_until_closed(socket).await,
             },
@@ -187,6 +208,16 @@ async fn serve(
             }
         }
     }
+}
+
+/// The session goes on elsewhere: close with 1012 ("service restart"), without `ended`, so
+/// that the browser connects again (through the proxy) and reaches it where it runs now.
+async fn moved(mut socket: WebSocket) {
+    let frame = CloseFrame {
+        code: close_code::RESTART,
+        reason: "the session moved to another server: connect again".into(),
+    };
+    let _ = socket.send(Message::Close(Some(frame))).await;
 }
 
 /// Nothing runs: refuse answers until the browser goes.

@@ -85,24 +85,6 @@ fn bin_dir() -> Option<PathBuf> {
     found.pop().map(|(_, bin)| bin)
 }
 
-fn is_root() -> bool {
-    output("id", &["-u"]).trim() == "0"
-}
-
-/// `program args...`'s stdout; panics when it fails.
-fn output(program: &str, args: &[&str]) -> String {
-    let out = Command::new(program)
-        .args(args)
-        .output()
-        .unwrap_or_else(|e| panic!("running {program}: {e}"));
-    assert!(
-        out.status.success(),
-        "{program} {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
-
 /// Debian's PostgreSQL, installed if missing (as root; else a failure that says what to do).
 fn install() -> Option<PathBuf> {
     if let Some(bin) = bin_dir() {
@@ -115,30 +97,17 @@ fn install() -> Option<PathBuf> {
         );
         return None;
     }
-    assert!(
-        is_root(),
-        "the PostgreSQL tests need Debian's postgresql (no initdb under /usr/lib/postgresql/*/bin).\n\
-         Install it with `sudo apt-get install -y postgresql` (`bash tests/run.sh` installs what is \
-         missing, then runs every test), or set DUALREP_SKIP_POSTGRES=1 to skip these tests."
+    super::debian::install(
+        "postgresql",
+        ", or set DUALREP_SKIP_POSTGRES=1 to skip the PostgreSQL tests",
     );
-    eprintln!("postgres: installing Debian's postgresql (apt-get)");
-    let apt = |args: &[&str]| {
-        let status = Command::new("apt-get")
-            .args(args)
-            .env("DEBIAN_FRONTEND", "noninteractive")
-            .status()
-            .expect("running apt-get");
-        assert!(status.success(), "apt-get {args:?} failed");
-    };
-    apt(&["update", "-qq"]);
-    apt(&["install", "-y", "-qq", "postgresql"]);
     Some(bin_dir().expect("postgresql installed, yet no initdb under /usr/lib/postgresql/*/bin"))
 }
 
 /// The uid and gid the cluster runs as: `dualrep-pg`'s (created if missing) when root, else
 /// none (this process's own).
 fn owner() -> Option<(u32, u32)> {
-    if !is_root() {
+    if !super::debian::is_root() {
         return None;
     }
     let id = |flag: &str| {
@@ -172,7 +141,7 @@ fn owner() -> Option<(u32, u32)> {
 }
 
 /// A port that was free a moment ago (postgres binds it right after).
-fn free_port() -> u16 {
+pub fn free_port() -> u16 {
     TcpListener::bind("127.0.0.1:0")
         .unwrap()
         .local_addr()
