@@ -54,8 +54,14 @@ struct TrainerLog {
     /// within its session).
     acked: Vec<(Arc<str>, i64, i64)>,
     errors: HashMap<String, u64>,
+    /// Trainers that never connected.
     connect_failures: u64,
+    /// Connection attempts refused and tried again.
+    connect_retries: u64,
 }
+
+/// How long a trainer waits before it tries a refused connection again.
+const CONNECT_RETRY: Duration = Duration::from_millis(200);
 
 #[derive(Serialize)]
 struct Report {
@@ -72,6 +78,7 @@ struct Report {
     errors: u64,
     errors_by_code: HashMap<String, u64>,
     connect_failures: u64,
+    connect_retries: u64,
     lost: u64,
     server: &'static str,
 }
@@ -90,12 +97,22 @@ fn value_for(query_id: i64) -> i64 {
 }
 
 async fn trainer(session: Arc<str>, url: String, until: Instant, log: Arc<Mutex<TrainerLog>>) {
-    // Nagle off, as a browser's small websocket messages go out at once.
-    let socket = match tokio_tungstenite::connect_async_with_config(&url, None, true).await {
-        Ok((s, _)) => s,
-        Err(_) => {
-            log.lock().unwrap().connect_failures += 1;
-            return;
+    // Nagle off, as a browser's small websocket messages go out at once. A refusal (503: on
+    // PostgreSQL a session no server has claimed yet) is tried again, as the page does.
+    let mut retries = 0;
+    let socket = loop {
+        match tokio_tungstenite::connect_async_with_config(&url, None, true).await {
+            Ok((s, _)) => break s,
+            Err(_) if Instant::now() + CONNECT_RETRY < until => {
+                retries += 1;
+                tokio::time::sleep(CONNECT_RETRY).await;
+            }
+            Err(_) => {
+                let mut log = log.lock().unwrap();
+                log.connect_failures += 1;
+                log.connect_retries += retries;
+                return;
+            }
         }
     };
     let (mut tx, mut rx) = socket.split();
@@ -143,6 +160,7 @@ async fn trainer(session: Arc<str>, url: String, until: Instant, log: Arc<Mutex<
     }
     let _ = tx.close().await;
     let mut log = log.lock().unwrap();
+    log.connect_retries += retries;
     log.sent += local.sent;
     log.latencies.extend(local.latencies);
     log.acked.extend(local.acked);
@@ -286,6 +304,7 @@ async fn loadtest(args: LoadtestArgs) -> anyhow::Result<()> {
         errors: log.errors.values().sum(),
         errors_by_code: log.errors,
         connect_failures: log.connect_failures,
+        connect_retries: log.connect_retries,
         lost,
         server: if running.is_some() {
             "in-process"
