@@ -5,12 +5,14 @@
 
 use std::time::{Duration, Instant};
 
-use serde_json::json;
+use serde_json::{Value, json};
 use sqlx::{Connection, Row};
 
+use crate::support::line_env::line_env;
 use crate::support::postgres;
 use crate::support::server::Api;
 use crate::support::shared_db::{BOUND, asked_once, finishes, owners, start, wait_for};
+use crate::support::trainer::{Trainer, token_of};
 
 /// Synthetic EF-50 sessions long enough to be mid-run when a server is killed.
 const STEPS: u64 = 4000;
@@ -213,5 +215,92 @@ async fn a_server_shut_down_gracefully_hands_its_sessions_over_at_once() {
         finishes(&api_b, id).await;
         asked_once(&api_b, &mut db, id).await;
     }
+    b.kill();
+}
+
+/// A human session on a remote env whose server is killed resumes on another server from its
+/// run's latest resume checkpoint, which the database keeps (the killed server's disk is not
+/// needed), and asks nothing a person answered again, by id or by moment.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_killed_servers_remote_session_resumes_on_another_from_its_checkpoint() {
+    let Some(pg) = postgres::database().await else {
+        return;
+    };
+    let mut db = sqlx::PgConnection::connect(&pg.url).await.unwrap();
+    let (dir_a, dir_b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let (mut a, api_a) = start(dir_a.path(), &pg.url, "1");
+    let addr = |api: &Api| api.base.trim_start_matches("http://").parse().unwrap();
+    let (status, launched) = api_a
+        .post(
+            "/api/sessions",
+            json!({"env": {"url": line_env(true)}, "method": "ef-100", "trainer": "human",
+                   "seed": 3, "steps": 200,
+                   "params": {"hidden": [8, 8], "batch_size": 16, "record": false,
+                              "pace_hz": 200, "answer_timeout_s": 60}}),
+        )
+        .await;
+    assert_eq!(status, 201, "{launched}");
+    let id = launched["id"].as_str().unwrap().to_string();
+    let token = token_of(launched["trainer_url"].as_str().unwrap());
+
+    // Episodes are 20 steps: answer past the checkpoint at step 20 by three, leave one open.
+    let wait = Duration::from_secs(60);
+    let mut t = Trainer::connect(addr(&api_a), &id, &token).await;
+    let mut answered: Vec<(i64, u64, Value)> = Vec::new();
+    let open = loop {
+        let q = t.next_of(&["query"], wait).await;
+        let step = q["step"].as_u64().unwrap();
+        if step >= 23 {
+            break q;
+        }
+        let qid = q["id"].as_i64().unwrap();
+        t.answer(qid, json!(if step % 2 == 0 { 1 } else { -1 }))
+            .await;
+        assert_eq!(t.next_of(&["ack"], wait).await["id"], qid);
+        answered.push((qid, step, q["action"].clone()));
+    };
+    let kept: i64 = sqlx::query("SELECT COUNT(*) AS n FROM session_resumes WHERE session_id = $1")
+        .bind(&id)
+        .fetch_one(&mut db)
+        .await
+        .unwrap()
+        .get("n");
+    assert_eq!(kept, 1, "the resume checkpoint is in the database");
+
+    // B starts; A dies with its data dir out of reach; B takes the session over.
+    let (mut b, api_b) = start(dir_b.path(), &pg.url, "1");
+    a.kill();
+    drop(dir_a);
+    let mut t = wait_for("B runs it and takes the socket", BOUND * 3, async || {
+        Trainer::try_connect(addr(&api_b), &id, &token).await
+    })
+    .await;
+    // The open query comes again (same moment: this env repeats its episodes); nothing
+    // answered does, by id or by moment.
+    let mut after = Vec::new();
+    for _ in 0..3 {
+        let q = t.next_of(&["query"], wait).await;
+        let (qid, step) = (q["id"].as_i64().unwrap(), q["step"].as_u64().unwrap());
+        for (done, done_step, done_action) in &answered {
+            assert_ne!(qid, *done, "answered query {done} asked again: {q}");
+            assert!(
+                !(step == *done_step && q["action"] == *done_action),
+                "query {qid} asks the moment of answered query {done} again: {q}"
+            );
+        }
+        t.answer(qid, json!(1)).await;
+        assert_eq!(t.next_of(&["ack"], wait).await["id"], qid);
+        after.push(q);
+    }
+    assert_eq!(
+        (&after[0]["step"], &after[0]["action"]),
+        (&open["step"], &open["action"]),
+        "the run resumed from its checkpoint at step 20 and met the open moment again"
+    );
+    t.close().await;
+    let (status, _) = api_b
+        .post(&format!("/api/sessions/{id}/stop"), json!({}))
+        .await;
+    assert_eq!(status, 200);
     b.kill();
 }

@@ -3,6 +3,7 @@
 pub mod binary;
 pub mod cli;
 pub mod debian;
+pub mod line_env;
 pub mod nginx;
 pub mod postgres;
 pub mod py_venv;

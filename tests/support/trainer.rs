@@ -25,6 +25,16 @@ impl Trainer {
         Self { ws }
     }
 
+    /// `None` when the server refuses the upgrade (e.g. 503 while no server runs the session).
+    pub async fn try_connect(
+        addr: std::net::SocketAddr,
+        session: &str,
+        token: &str,
+    ) -> Option<Self> {
+        let url = format!("ws://{addr}/ws/sessions/{session}?token={token}");
+        connect_async(url).await.ok().map(|(ws, _)| Self { ws })
+    }
+
     pub async fn send_text(&mut self, text: &str) {
         self.ws
             .send(Message::Text(text.to_string().into()))
