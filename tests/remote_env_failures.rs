@@ -8,9 +8,9 @@ use std::collections::BTreeMap;
 use std::net::TcpListener;
 use std::time::{Duration, Instant};
 
-use crate::support::line_env::{line_env, line_hello, line_step, read, write};
+use crate::support::line_env::{launch_human_on_line, line_hello, line_step, read, write};
 use crate::support::server::{Api, serve};
-use crate::support::trainer::{Trainer, token_of};
+use crate::support::trainer::Trainer;
 use dualrep::guidance::evaluative_run::EvaluativeRun;
 use serde_json::{Value, json};
 
@@ -148,18 +148,7 @@ async fn answered_past_checkpoint_stopped_and_resumed(repeats: bool) -> Resumed 
     let dir = tempfile::tempdir().unwrap();
     let server = serve(dir.path()).await;
     let api = Api::new(server.addr);
-    let (status, launched) = api
-        .post(
-            "/api/sessions",
-            json!({"env": {"url": line_env(repeats)}, "method": "ef-100", "trainer": "human",
-                   "seed": 3, "steps": 200,
-                   "params": {"hidden": [8, 8], "batch_size": 16, "record": false,
-                              "pace_hz": 200, "answer_timeout_s": 60}}),
-        )
-        .await;
-    assert_eq!(status, 201, "{launched}");
-    let id = launched["id"].as_str().unwrap().to_string();
-    let token = token_of(launched["trainer_url"].as_str().unwrap());
+    let (id, token) = launch_human_on_line(&api, repeats).await;
 
     // Answer every query up to three steps past the checkpoint at step 20; leave the next open.
     let mut t = Trainer::connect(server.addr, &id, &token).await;

@@ -8,11 +8,11 @@ use std::time::{Duration, Instant};
 use serde_json::{Value, json};
 use sqlx::{Connection, Row};
 
-use crate::support::line_env::line_env;
+use crate::support::line_env::launch_human_on_line;
 use crate::support::postgres;
 use crate::support::server::Api;
 use crate::support::shared_db::{BOUND, asked_once, finishes, owners, start, wait_for};
-use crate::support::trainer::{Trainer, token_of};
+use crate::support::trainer::Trainer;
 
 /// Synthetic EF-50 sessions long enough to be mid-run when a server is killed.
 const STEPS: u64 = 4000;
@@ -230,18 +230,7 @@ async fn a_killed_servers_remote_session_resumes_on_another_from_its_checkpoint(
     let (dir_a, dir_b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
     let (mut a, api_a) = start(dir_a.path(), &pg.url, "1");
     let addr = |api: &Api| api.base.trim_start_matches("http://").parse().unwrap();
-    let (status, launched) = api_a
-        .post(
-            "/api/sessions",
-            json!({"env": {"url": line_env(true)}, "method": "ef-100", "trainer": "human",
-                   "seed": 3, "steps": 200,
-                   "params": {"hidden": [8, 8], "batch_size": 16, "record": false,
-                              "pace_hz": 200, "answer_timeout_s": 60}}),
-        )
-        .await;
-    assert_eq!(status, 201, "{launched}");
-    let id = launched["id"].as_str().unwrap().to_string();
-    let token = token_of(launched["trainer_url"].as_str().unwrap());
+    let (id, token) = launch_human_on_line(&api_a, true).await;
 
     // Episodes are 20 steps: answer past the checkpoint at step 20 by three, leave one open.
     let wait = Duration::from_secs(60);

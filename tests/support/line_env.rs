@@ -75,3 +75,23 @@ pub fn line_env(repeats: bool) -> String {
     });
     url
 }
+
+/// A human EF-100 session of 200 steps on a new [`line_env`] (episodes of 20 steps, a
+/// checkpoint after each), launched through `api`; its id and trainer token.
+pub async fn launch_human_on_line(api: &super::server::Api, repeats: bool) -> (String, String) {
+    let (status, launched) = api
+        .post(
+            "/api/sessions",
+            json!({"env": {"url": line_env(repeats)}, "method": "ef-100", "trainer": "human",
+                   "seed": 3, "steps": 200,
+                   "params": {"hidden": [8, 8], "batch_size": 16, "record": false,
+                              "pace_hz": 200, "answer_timeout_s": 60}}),
+        )
+        .await;
+    assert_eq!(status, 201, "{launched}");
+    let id = launched["id"].as_str().unwrap().to_string();
+    (
+        id,
+        super::trainer::token_of(launched["trainer_url"].as_str().unwrap()),
+    )
+}
