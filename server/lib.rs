@@ -45,7 +45,8 @@
 //! - [`hub`]: the sessions a server runs: a cap on how many at once, one thread each, and one
 //!   owner task each that alone holds the session's live state (events, answers, undo,
 //!   deadlines and status in one `select!`; commit, then acknowledge); stop, resume and
-//!   graceful shutdown.
+//!   graceful shutdown; on PostgreSQL, several servers: leases on the sessions each runs, and
+//!   relays to those another runs, over LISTEN/NOTIFY (`docs/serving-several.md`).
 //! - [`http`]: REST routes (sessions, trainers, datasets, studies and their participants),
 //!   security headers, the web UI's files; [`ws`]: the trainer
 //!   websocket and its typed protocol; [`api`]: what both share (the app state, who may call,
