@@ -59,6 +59,8 @@ async fn train(
     owner_addr: impl Fn() -> futures_util::future::BoxFuture<'static, Option<String>>,
 ) -> String {
     let mut relayed_once = false;
+    // Round robin gives the other server within a few tries; past ten, keep what came.
+    let mut tries = 0;
     loop {
         let url = format!("ws://{proxy}/ws/sessions/{id}?token={token}");
         // Refused (503: between servers) or cut: try again shortly, as the page does.
@@ -79,7 +81,8 @@ async fn train(
                 tally.relayed.fetch_add(1, Ordering::Relaxed);
                 relayed_once = true;
             }
-            (Some(_), Some(_)) if !relayed_once => {
+            (Some(_), Some(_)) if !relayed_once && tries < 10 => {
+                tries += 1;
                 let _ = ws.close(None).await;
                 continue;
             }
