@@ -6,8 +6,8 @@ use std::fmt::Write;
 
 use super::aggregate::{Fig3Task, Fig5Method, Fig5Task};
 use super::methods::{
-    AuthorsRatio, Fig3Method, Published, authors_ratios, display_name, matched_ef_method,
-    paper_steps, published_fig3, published_ratio, task_title,
+    AuthorsRatio, Fig3Method, Published, authors_ratios, display_name, paper_steps, published_fig3,
+    published_ratio, task_title,
 };
 use super::rank_test::mann_whitney_greater;
 use super::stats::{MeanSe, mean_se};
@@ -264,6 +264,11 @@ fn per_run_pacing(task: &Fig3Task) -> String {
     out
 }
 
+/// How far (percentage points) an EF row's rate may lie from DREF's mean rate and still be
+/// "EF at its rate": the grid names the row after the rate to two decimals (`matched_ef_method`),
+/// a run named by hand may carry one (EF-8.9 for a DREF at 8.89 %).
+const MATCHED_RATE_TOLERANCE_PP: f64 = 0.05;
+
 /// For each DREF row with an "EF at its rate" row beside it: whether DREF's seeds lie above
 /// EF's, by the one-sided exact Mann-Whitney U test over seeds.
 fn dref_against_matched(task: &Fig3Task) -> String {
@@ -272,8 +277,17 @@ fn dref_against_matched(task: &Fig3Task) -> String {
         if !Fig3Method::parse(&dref.method).is_some_and(Fig3Method::is_dref) {
             continue;
         }
-        let matched = matched_ef_method(dref.feedback_pct.mean);
-        let Some(ef) = task.methods.iter().find(|m| m.method == matched) else {
+        let rate = dref.feedback_pct.mean;
+        let distance = |m: &&super::aggregate::Fig3Method| match Fig3Method::parse(&m.method) {
+            Some(Fig3Method::EfMatched(p)) => (p - rate).abs(),
+            _ => f64::INFINITY,
+        };
+        let Some(ef) = task
+            .methods
+            .iter()
+            .filter(|m| distance(m) <= MATCHED_RATE_TOLERANCE_PP + 1e-9)
+            .min_by(|a, b| distance(a).total_cmp(&distance(b)))
+        else {
             continue;
         };
         if let Some(t) = mann_whitney_greater(&dref.finals, &ef.finals) {

@@ -45,7 +45,8 @@ fn report_numbers_are_formatted_like_the_paper() {
 
 #[test]
 fn report_fig3_table_puts_the_papers_values_beside_ours() {
-    let mut dref = fig3_row("dref", ms(30_000.0, 1_000.0, 5), ms(6.2, 0.4, 5));
+    // At 6.24 %, DREF's EF row named to one decimal (EF-6.2) is still "at its rate".
+    let mut dref = fig3_row("dref", ms(30_000.0, 1_000.0, 5), ms(6.24, 0.4, 5));
     dref.finals = vec![31e3, 29e3, 30e3, 32e3, 28e3];
     let mut matched = fig3_row("ef-6.2", ms(-1_000.0, 2_000.0, 4), ms(6.1, 0.1, 4));
     matched.finals = vec![-1e3, -3e3, 1e3, 0.0];
