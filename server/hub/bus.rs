@@ -218,8 +218,13 @@ impl Hub {
                 let Some(session) = other.session().map(str::to_owned) else {
                     return;
                 };
-                if !self.to_relay(&session, other.clone())
-                    && let Envelope::Cast { from, .. } = other
+                // Only a cast's sender is kept aside (casts are most of the traffic: no copy).
+                let cast_from = match &other {
+                    Envelope::Cast { from, .. } => Some(from.clone()),
+                    _ => None,
+                };
+                if !self.to_relay(&session, other)
+                    && let Some(from) = cast_from
                 {
                     // Casts for a relay that has gone: no more of them.
                     self.bus_send(&from, ask(&session, &self.server_id, 0, Ask::Leave));

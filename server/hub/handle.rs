@@ -106,6 +106,24 @@ pub struct Snapshot {
     pub graph: Option<crate::scene_graph::SceneGraph>,
 }
 
+impl Snapshot {
+    /// Before anything ran: `status`, at `progress` of the plan's budget.
+    pub(super) fn initial(plan: &SessionPlan, status: Status, progress: u64) -> Self {
+        Self {
+            status,
+            reason: None,
+            progress: ProgressMessage {
+                progress,
+                budget: plan.spec.budget,
+                unit: plan.spec.method.budget_unit().into(),
+                ..Default::default()
+            },
+            geometry: None,
+            graph: None,
+        }
+    }
+}
+
 /// A live session, as the HTTP routes and sockets hold it. Cheap to clone.
 #[derive(Clone, Debug)]
 pub struct SessionHandle {

@@ -125,19 +125,9 @@ impl Owner {
     ) -> (Self, SessionHandle, UnboundedReceiver<Command>) {
         let plan = Arc::new(plan);
         let (answers_per_query, combine) = (plan.settings.answers_per_query, plan.settings.combine);
-        let progress = ProgressMessage {
-            progress: resumed_at,
-            budget: plan.spec.budget,
-            unit: plan.spec.method.budget_unit().into(),
-            ..Default::default()
-        };
-        let (snapshot, snapshot_rx) = watch::channel(Snapshot {
-            status: Status::Queued,
-            reason: None,
-            progress: progress.clone(),
-            geometry: None,
-            graph: None,
-        });
+        let initial = Snapshot::initial(&plan, Status::Queued, resumed_at);
+        let progress = initial.progress.clone();
+        let (snapshot, snapshot_rx) = watch::channel(initial);
         let (commands, commands_rx): (UnboundedSender<Command>, _) =
             tokio::sync::mpsc::unbounded_channel();
         let (broadcast, _) = broadcast::channel(BROADCAST_CAPACITY);

@@ -24,7 +24,7 @@ use tokio::time::{Instant, MissedTickBehavior};
 use super::bus::{ASK_TIMEOUT, Ask, Envelope, Reply, ask};
 use super::handle::{AnswerReply, Command, Identity, Joined, SessionHandle, Snapshot};
 use super::{Hub, plan_of};
-use crate::protocol::{ErrorCode, ProgressMessage, ProtocolError};
+use crate::protocol::{ErrorCode, ProtocolError};
 use crate::store::{SessionRow, Status};
 
 /// How long a relay no socket uses stays up (a page that reloads finds it again).
@@ -169,19 +169,9 @@ impl Hub {
         let (commands, commands_rx) = unbounded_channel();
         let (inbox, inbox_rx) = unbounded_channel();
         let (ready, ready_rx) = watch::channel(false);
-        let progress = ProgressMessage {
-            progress: u64::try_from(row.progress).unwrap_or(0),
-            budget: plan.spec.budget,
-            unit: plan.spec.method.budget_unit().into(),
-            ..Default::default()
-        };
-        let (snapshot, snapshot_rx) = watch::channel(Snapshot {
-            status: row.status,
-            reason: None,
-            progress,
-            geometry: None,
-            graph: None,
-        });
+        let progress = u64::try_from(row.progress).unwrap_or(0);
+        let (snapshot, snapshot_rx) =
+            watch::channel(Snapshot::initial(&plan, row.status, progress));
         let handle = SessionHandle {
             id: row.id.as_str().into(),
             commands,
