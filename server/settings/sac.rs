@@ -66,7 +66,8 @@ pub struct HumanCriticSection {
     /// Weight of the human critic against Q in the actor loss (the authors: 9).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lambda: Option<f32>,
-    /// How the actor mixes Q and H: `authors` (head-wise) or `paper` (Eq. 5).
+    /// How the actor mixes Q and H: `authors` (head-wise), `paper` (Eq. 5) or `answered` (the
+    /// authors' mix where the step was answered, H as 0 elsewhere).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mix: Option<ActorMix>,
     /// Regress the human critic only on transitions that had feedback.

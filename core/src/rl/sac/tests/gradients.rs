@@ -226,6 +226,54 @@ fn actor_loss_gradient_paper_mix() {
 }
 
 #[test]
+fn actor_loss_gradient_answered_mix() {
+    let human = HumanCriticConfig {
+        lambda: 9.0,
+        mix: ActorMix::Answered,
+        mask: true,
+        anchor: 0.0,
+    };
+    actor_case("actor loss, answered mix", Some(human));
+}
+
+/// The answered mix reads H only on answered rows: with no answer in the batch the loss is the
+/// authors' mix with H = 0 (whatever H says), and with every row answered it is the authors' mix.
+#[test]
+fn answered_mix_reads_h_on_answered_rows_only() {
+    let with = |mix: ActorMix, human: f32, scale_h: f32| {
+        let config = HumanCriticConfig {
+            lambda: 9.0,
+            mix,
+            mask: true,
+            anchor: 0.0,
+        };
+        let mut sac = tiny(Some(config));
+        sac.buffers.batch.human.fill(human);
+        for p in sac.human_critic.as_mut().unwrap().h1.params_mut() {
+            *p *= scale_h;
+        }
+        sac.sample_policy_at_obs();
+        sac.actor_loss(ENT_COEF)
+    };
+    let silent = with(ActorMix::Answered, 0.0, 1.0);
+    assert_eq!(
+        silent,
+        with(ActorMix::Answered, 0.0, 3.0),
+        "H unread on silent rows"
+    );
+    assert_ne!(
+        silent,
+        with(ActorMix::Authors, 0.0, 1.0),
+        "the authors' mix reads H"
+    );
+    assert_eq!(
+        with(ActorMix::Answered, 1.0, 1.0),
+        with(ActorMix::Authors, 1.0, 1.0),
+        "every row answered: the authors' mix"
+    );
+}
+
+#[test]
 fn temperature_loss_gradient() {
     let log_pi = [0.3f32, -1.7, 2.2, 0.9];
     let (target_entropy, log_ent_coef) = (-2.0f32, -0.4f32);
