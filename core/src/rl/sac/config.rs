@@ -71,7 +71,7 @@ pub enum ActorMix {
     Authors,
     /// The paper's Eq. 5: `min_j Q_j + lambda min_j H_j`.
     Paper,
-    /// Our choice (`human_critic_mix = "answered"`): the authors' mix on the sampled rows whose
+    /// Our choice (the setting `mix = "answered"`): the authors' mix on the sampled rows whose
     /// step was answered (H != 0), and on the others H taken as 0, which is what the authors'
     /// unmasked critic learns there: `min_j(w_q Q_j)`. With the mask the critic no longer
     /// regresses unanswered rows to 0, so it extrapolates a few answers to states nobody judged;
