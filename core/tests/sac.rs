@@ -49,6 +49,7 @@ fn per_task_table() {
                 mix: ActorMix::Authors,
                 mask: false,
                 anchor: 0.0,
+                unanswered: 0.0,
             })
         );
     }

@@ -78,6 +78,10 @@ pub struct HumanCriticSection {
     /// the plain mask).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub human_critic_anchor: Option<f32>,
+    /// With `mix = "answered"`: the share of H's weight the actor keeps on transitions nobody
+    /// answered (0: none, 1: the authors' mix).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mix_unanswered: Option<f32>,
 }
 
 /// `hidden` as a list of layer sizes, the CLI's comma-separated text, or one number.
@@ -169,6 +173,7 @@ impl HumanCriticSection {
             mix: Some(critic.mix),
             human_critic_mask: Some(critic.mask),
             human_critic_anchor: Some(critic.anchor),
+            mix_unanswered: Some(critic.unanswered),
         }
     }
 
@@ -207,6 +212,21 @@ impl HumanCriticSection {
                 ));
             }
             critic(sac).anchor = a;
+        }
+        if let Some(w) = self.mix_unanswered {
+            if !(0.0..=1.0).contains(&w) {
+                return Err(SettingsError::bad(
+                    "mix_unanswered",
+                    format!("expected a share between 0 and 1, got {w}"),
+                ));
+            }
+            if w > 0.0 && critic(sac).mix != ActorMix::Answered {
+                return Err(SettingsError::bad(
+                    "mix_unanswered",
+                    "weighs H on unanswered transitions of the answered mix: set mix = \"answered\" too",
+                ));
+            }
+            critic(sac).unanswered = w;
         }
         Ok(())
     }

@@ -48,6 +48,16 @@ pub struct HumanCriticConfig {
     /// answers keep their own weight however much they are outnumbered.
     #[serde(default)]
     pub anchor: f32,
+    /// `mix_unanswered` (our choice, with [`ActorMix::Answered`]): the share of H's weight the
+    /// actor keeps on sampled rows nobody answered, between the answered mix's 0 (follow Q
+    /// only where there is no answer) and the authors' 1 (follow the critic's extrapolation
+    /// everywhere). Left out of a run's config while 0, so earlier configs read as they were.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub unanswered: f32,
+}
+
+fn is_zero(x: &f32) -> bool {
+    *x == 0.0
 }
 
 impl Default for HumanCriticConfig {
@@ -57,6 +67,7 @@ impl Default for HumanCriticConfig {
             mix: ActorMix::Authors,
             mask: false,
             anchor: 0.0,
+            unanswered: 0.0,
         }
     }
 }
@@ -76,6 +87,7 @@ pub enum ActorMix {
     /// unmasked critic learns there: `min_j(w_q Q_j)`. With the mask the critic no longer
     /// regresses unanswered rows to 0, so it extrapolates a few answers to states nobody judged;
     /// this keeps the actor from following it there, without pulling H itself towards 0.
+    /// [`HumanCriticConfig::unanswered`] keeps a share of H's weight on those rows.
     Answered,
 }
 

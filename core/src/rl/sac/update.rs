@@ -172,8 +172,8 @@ impl Sac {
     /// - [`ActorMix::Authors`]: `mean(ent_coef log_pi - min_j (w_q Q_j + w_h H_j))`,
     ///   `w_q = 1 / (1 + lambda)`, `w_h = lambda / (1 + lambda)` (their `0.1 Q + 0.9 H`);
     /// - [`ActorMix::Paper`]: `mean(ent_coef log_pi - (min_j Q_j + lambda min_j H_j))`;
-    /// - [`ActorMix::Answered`]: the authors' mix with `w_h = 0` on the rows whose stored H is 0
-    ///   (no answer).
+    /// - [`ActorMix::Answered`]: the authors' mix with `w_h` times `unanswered` (0 by default) on
+    ///   the rows whose stored H is 0 (no answer).
     ///
     /// The critics are frozen: each passes dL/d a_pi back through `backward_input` only. Then
     /// `squashed_gaussian::backward` adds the path through `log_pi` and takes both to
@@ -237,14 +237,15 @@ impl Sac {
                     let (value, dq, dh) = match config.mix {
                         ActorMix::Authors | ActorMix::Answered => {
                             // The authors' head-wise mix: min_j(0.1 Q_j + 0.9 H_j) at lambda = 9;
-                            // `Answered` takes H as 0 on a row nobody answered.
+                            // `Answered` keeps `unanswered` of H's weight (by default none) on a
+                            // row nobody answered.
                             let answered =
                                 config.mix == ActorMix::Authors || b.batch.human[i] != 0.0;
                             let w_q = 1.0 / (1.0 + lambda);
                             let w_h = if answered {
                                 lambda / (1.0 + lambda)
                             } else {
-                                0.0
+                                config.unanswered * lambda / (1.0 + lambda)
                             };
                             let mixed = [w_q * q[0] + w_h * h[0], w_q * q[1] + w_h * h[1]];
                             let first = mixed[0] <= mixed[1];

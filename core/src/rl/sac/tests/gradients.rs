@@ -151,6 +151,7 @@ fn an_anchored_critic_still_learns_from_a_batch_without_feedback() {
     let human = HumanCriticConfig {
         mask: true,
         anchor: 0.1,
+        unanswered: 0.0,
         ..HumanCriticConfig::default()
     };
     let mut sac = tiny(Some(human));
@@ -210,6 +211,7 @@ fn actor_loss_gradient_authors_mix() {
         mix: ActorMix::Authors,
         mask: false,
         anchor: 0.0,
+        unanswered: 0.0,
     };
     actor_case("actor loss, authors' mix", Some(human));
 }
@@ -221,31 +223,41 @@ fn actor_loss_gradient_paper_mix() {
         mix: ActorMix::Paper,
         mask: false,
         anchor: 0.0,
+        unanswered: 0.0,
     };
     actor_case("actor loss, paper's mix", Some(human));
 }
 
 #[test]
 fn actor_loss_gradient_answered_mix() {
-    let human = HumanCriticConfig {
-        lambda: 9.0,
-        mix: ActorMix::Answered,
-        mask: true,
-        anchor: 0.0,
-    };
-    actor_case("actor loss, answered mix", Some(human));
+    for unanswered in [0.0, 0.3] {
+        let human = HumanCriticConfig {
+            lambda: 9.0,
+            mix: ActorMix::Answered,
+            mask: true,
+            anchor: 0.0,
+            unanswered,
+        };
+        actor_case(
+            &format!("actor loss, answered mix, unanswered {unanswered}"),
+            Some(human),
+        );
+    }
 }
 
 /// The answered mix reads H only on answered rows: with no answer in the batch the loss is the
 /// authors' mix with H = 0 (whatever H says), and with every row answered it is the authors' mix.
+/// With `unanswered = 1` it is the authors' mix everywhere, and in between it reads H on silent
+/// rows at that share of its weight.
 #[test]
 fn answered_mix_reads_h_on_answered_rows_only() {
-    let with = |mix: ActorMix, human: f32, scale_h: f32| {
+    let with = |mix: ActorMix, unanswered: f32, human: f32, scale_h: f32| {
         let config = HumanCriticConfig {
             lambda: 9.0,
             mix,
             mask: true,
             anchor: 0.0,
+            unanswered,
         };
         let mut sac = tiny(Some(config));
         sac.buffers.batch.human.fill(human);
@@ -255,21 +267,33 @@ fn answered_mix_reads_h_on_answered_rows_only() {
         sac.sample_policy_at_obs();
         sac.actor_loss(ENT_COEF)
     };
-    let silent = with(ActorMix::Answered, 0.0, 1.0);
+    let silent = with(ActorMix::Answered, 0.0, 0.0, 1.0);
     assert_eq!(
         silent,
-        with(ActorMix::Answered, 0.0, 3.0),
+        with(ActorMix::Answered, 0.0, 0.0, 3.0),
         "H unread on silent rows"
     );
-    assert_ne!(
-        silent,
-        with(ActorMix::Authors, 0.0, 1.0),
-        "the authors' mix reads H"
+    let authors = with(ActorMix::Authors, 0.0, 0.0, 1.0);
+    assert_ne!(silent, authors, "the authors' mix reads H");
+    assert_eq!(
+        with(ActorMix::Answered, 0.0, 1.0, 1.0),
+        with(ActorMix::Authors, 0.0, 1.0, 1.0),
+        "every row answered: the authors' mix"
     );
     assert_eq!(
-        with(ActorMix::Answered, 1.0, 1.0),
-        with(ActorMix::Authors, 1.0, 1.0),
-        "every row answered: the authors' mix"
+        with(ActorMix::Answered, 1.0, 0.0, 1.0),
+        authors,
+        "unanswered = 1: the authors' mix on silent rows too"
+    );
+    let partial = with(ActorMix::Answered, 0.3, 0.0, 1.0);
+    assert_ne!(
+        partial,
+        with(ActorMix::Answered, 0.3, 0.0, 3.0),
+        "unanswered = 0.3 reads H on silent rows"
+    );
+    assert!(
+        partial != silent && partial != authors,
+        "0.3 is neither end: {silent} {partial} {authors}"
     );
 }
 

@@ -168,6 +168,7 @@ fn dref_with_the_authors_mix_agrees_with_pytorch() {
             mix: ActorMix::Authors,
             mask: false,
             anchor: 0.0,
+            unanswered: 0.0,
         };
         let worst = check(
             Some(human),
@@ -187,6 +188,7 @@ fn dref_with_the_paper_mix_and_mask_agrees_with_pytorch() {
             mix: ActorMix::Paper,
             mask: true,
             anchor: 0.0,
+            unanswered: 0.0,
         };
         let worst = check(
             Some(human),
