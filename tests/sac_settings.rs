@@ -50,11 +50,20 @@ fn settings_override_every_sac_key() {
             mask: true,
             anchor: 0.25,
             unanswered: 0.0,
+            answered_after: 0,
         })
     );
-    let answered = sac_with(&[("mix", "answered"), ("mix_unanswered", "0.3")]).unwrap();
+    let answered = sac_with(&[
+        ("mix", "answered"),
+        ("mix_unanswered", "0.3"),
+        ("mix_answered_after", "10"),
+    ])
+    .unwrap();
     let critic = answered.human_critic.unwrap();
-    assert_eq!((critic.mix, critic.unanswered), (ActorMix::Answered, 0.3));
+    assert_eq!(
+        (critic.mix, critic.unanswered, critic.answered_after),
+        (ActorMix::Answered, 0.3, 10)
+    );
     let c = sac_with(&[("target_entropy", "-3"), ("target_entropy", "auto")]).unwrap();
     assert_eq!(c.target_entropy, None);
     assert_eq!(
@@ -87,6 +96,8 @@ fn settings_reject_unknown_keys_and_bad_values_clearly() {
         ("human_critic_anchor", "0.5", "human_critic_mask = true"),
         ("mix_unanswered", "1.5", "between 0 and 1"),
         ("mix_unanswered", "0.3", "mix = \"answered\""),
+        ("mix_answered_after", "10", "mix = \"answered\""),
+        ("mix_answered_after", "-1", "invalid"),
     ] {
         let err = sac_with(&[(k, v)]).expect_err(&format!("{k}={v} accepted"));
         assert_eq!(err.key(), Some(k), "{k}={v}: {err:?} should name its key");

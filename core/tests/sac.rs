@@ -50,6 +50,7 @@ fn per_task_table() {
                 mask: false,
                 anchor: 0.0,
                 unanswered: 0.0,
+                answered_after: 0,
             })
         );
     }

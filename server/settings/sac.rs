@@ -82,6 +82,10 @@ pub struct HumanCriticSection {
     /// answered (0: none, 1: the authors' mix).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mix_unanswered: Option<f32>,
+    /// With `mix = "answered"`: the actor reads H at full weight everywhere until the run's
+    /// N-th successful episode, and as `mix_unanswered` says after it (0: from the start).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mix_answered_after: Option<u32>,
 }
 
 /// `hidden` as a list of layer sizes, the CLI's comma-separated text, or one number.
@@ -174,6 +178,7 @@ impl HumanCriticSection {
             human_critic_mask: Some(critic.mask),
             human_critic_anchor: Some(critic.anchor),
             mix_unanswered: Some(critic.unanswered),
+            mix_answered_after: Some(critic.answered_after),
         }
     }
 
@@ -227,6 +232,15 @@ impl HumanCriticSection {
                 ));
             }
             critic(sac).unanswered = w;
+        }
+        if let Some(n) = self.mix_answered_after {
+            if n > 0 && critic(sac).mix != ActorMix::Answered {
+                return Err(SettingsError::bad(
+                    "mix_answered_after",
+                    "gates the answered mix: set mix = \"answered\" too",
+                ));
+            }
+            critic(sac).answered_after = n;
         }
         Ok(())
     }

@@ -92,6 +92,8 @@ pub struct EvaluativeRun {
     episode_return: f64,
     episode_length: u32,
     cumulative_return: f64,
+    /// Episodes that ended in success (the gate of `answered_after`).
+    successes: u64,
     feedback_count: u64,
     no_feedback_count: u64,
     /// Queries the method wanted that a person's pace held back.
@@ -152,6 +154,7 @@ impl EvaluativeRun {
             episode_return: 0.0,
             episode_length: 0,
             cumulative_return: 0.0,
+            successes: 0,
             feedback_count: 0,
             no_feedback_count: 0,
             held_back: 0,
@@ -177,6 +180,24 @@ impl EvaluativeRun {
 
     pub fn cumulative_return(&self) -> f64 {
         self.cumulative_return
+    }
+
+    /// Episodes that ended in success so far.
+    pub fn successes(&self) -> u64 {
+        self.successes
+    }
+
+    /// Whether the answered mix's gate is open: the human critic has `answered_after` set and
+    /// the run has had fewer successful episodes than that, so the actor still reads H on
+    /// unanswered rows at full weight.
+    pub fn reads_h_everywhere(&self) -> bool {
+        let after = self
+            .config
+            .sac
+            .human_critic
+            .as_ref()
+            .map_or(0, |c| c.answered_after);
+        self.successes < u64::from(after)
     }
 
     /// Queries asked so far.
@@ -295,6 +316,8 @@ impl EvaluativeRun {
             self.queried.push((self.steps, slot));
         }
         self.pacing.step(self.steps, evaluation.is_some());
+        let gate = self.reads_h_everywhere().then_some(1.0);
+        self.learner.set_unanswered_override(gate);
         let update = self.learner.update(&self.replay);
 
         self.steps += 1;
@@ -348,6 +371,7 @@ impl EvaluativeRun {
     /// up to the episode's end but with no episode under way: resume from a checkpoint.
     fn finish_episode(&mut self, outcome: Outcome) -> Result<EpisodeRecord, EnvFault> {
         self.cumulative_return += self.episode_return;
+        self.successes += u64::from(outcome == Outcome::Success);
         let record = EpisodeRecord {
             step: self.steps,
             episode: self.episodes,

@@ -259,3 +259,56 @@ fn the_as_run_action_scale_shows_the_oracle_and_h_hat_a_tenth_of_the_action() {
     let full = run.learner.human_estimate(&run.obs.clone(), &[0.8, -0.6]);
     assert_ne!(shown, full);
 }
+
+/// `answered_after`: the answered mix reads H at full weight everywhere, which is the authors'
+/// mix bit for bit, until the run's N-th successful episode has ended; then it reads H only on
+/// answered rows, and the learner parts from the authors'.
+#[test]
+fn the_answered_mix_reads_h_everywhere_until_the_first_success() {
+    use crate::rl::ActorMix;
+    let with = |mix: ActorMix, answered_after: u32| {
+        let mut config = tiny(Task::Reaching, "dref");
+        let critic = config.sac.human_critic.as_mut().unwrap();
+        (critic.mix, critic.answered_after) = (mix, answered_after);
+        config
+    };
+    // What the learner does at a fixed state: its action, Q and H there.
+    let probe = |run: &EvaluativeRun| {
+        let mut sac = run.learner().clone();
+        let (obs, mut action) = ([0.1f32, -0.2], [0.0f32; 2]);
+        sac.act(&obs, true, &mut action);
+        let (q, h) = (
+            sac.q_value(&obs, &action),
+            sac.human_estimate(&obs, &action),
+        );
+        [action[0], action[1], q, h].map(f32::to_bits)
+    };
+    let (_, _, episodes) = run(with(ActorMix::Authors, 0), 4000);
+    let first = episodes
+        .iter()
+        .find(|e| e.outcome == Outcome::Success)
+        .expect("a success within 4,000 steps")
+        .step;
+    let (authors, ..) = run(with(ActorMix::Authors, 0), first);
+    let (gated, ..) = run(with(ActorMix::Answered, 1), first);
+    assert_eq!(gated.successes(), 1);
+    assert!(
+        !gated.reads_h_everywhere(),
+        "the gate shuts at the first success"
+    );
+    assert_eq!(
+        probe(&gated),
+        probe(&authors),
+        "the authors' mix until the first success ({first} steps)"
+    );
+    let (authors, ..) = run(with(ActorMix::Authors, 0), first + 50);
+    let (gated, ..) = run(with(ActorMix::Answered, 1), first + 50);
+    assert_ne!(probe(&gated), probe(&authors), "the answered mix after it");
+    let (never, ..) = run(with(ActorMix::Answered, 1000), first + 50);
+    assert!(never.reads_h_everywhere());
+    assert_eq!(
+        probe(&never),
+        probe(&authors),
+        "a gate that never shuts is the authors' mix"
+    );
+}

@@ -63,6 +63,10 @@ struct RunState {
     steps: u64,
     episodes: u64,
     cumulative_return: f64,
+    /// Successful episodes (checkpoints written before it existed read as 0: their runs had
+    /// no gate that counts them).
+    #[serde(default)]
+    successes: u64,
     feedback_count: u64,
     no_feedback_count: u64,
     /// Queries a person's pace held back (checkpoints written before it existed read as 0).
@@ -144,6 +148,7 @@ impl EvaluativeRun {
             steps: self.steps,
             episodes: self.episodes,
             cumulative_return: self.cumulative_return,
+            successes: self.successes,
             feedback_count: self.feedback_count,
             no_feedback_count: self.no_feedback_count,
             held_back: self.held_back,
@@ -257,6 +262,7 @@ impl EvaluativeRun {
             episode_return: 0.0,
             episode_length: 0,
             cumulative_return: state.cumulative_return,
+            successes: state.successes,
             feedback_count: state.feedback_count,
             no_feedback_count: state.no_feedback_count,
             held_back: state.held_back,
@@ -356,6 +362,7 @@ mod tests {
                 first.step(&mut first_oracle);
             }
             let stopped_at = first.steps();
+            let successes_at_stop = first.successes();
             let bytes = first.checkpoint(&first_oracle, serde_json::json!({"note": stopped_at}));
             drop(first);
             assert_eq!(EvaluativeRun::checkpoint_kernels(&bytes).unwrap(), path);
@@ -365,6 +372,7 @@ mod tests {
                 EvaluativeRun::resume(&bytes, &config, &mut fresh_oracle).unwrap();
             assert_eq!(notes["note"], stopped_at);
             assert_eq!(resumed.steps(), stopped_at);
+            assert_eq!(resumed.successes(), successes_at_stop);
             let tail = drive(&mut resumed, &mut fresh_oracle, steps);
             let expected: Vec<_> = all
                 .iter()

@@ -54,10 +54,22 @@ pub struct HumanCriticConfig {
     /// everywhere). Left out of a run's config while 0, so earlier configs read as they were.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub unanswered: f32,
+    /// `mix_answered_after` (our choice, with [`ActorMix::Answered`]): until the run's N-th
+    /// successful episode the actor reads H on unanswered rows at full weight (the authors'
+    /// mix), and only then as `unanswered` says. A learner the environment has not yet
+    /// rewarded has nothing but the critic's extrapolation of a few answers to follow (a
+    /// sparse task such as Placing); once it has succeeded, Q carries the way and H is read
+    /// where people answered. 0: no gate. Left out of a run's config while 0.
+    #[serde(default, skip_serializing_if = "is_zero_count")]
+    pub answered_after: u32,
 }
 
 fn is_zero(x: &f32) -> bool {
     *x == 0.0
+}
+
+fn is_zero_count(n: &u32) -> bool {
+    *n == 0
 }
 
 impl Default for HumanCriticConfig {
@@ -68,6 +80,7 @@ impl Default for HumanCriticConfig {
             mask: false,
             anchor: 0.0,
             unanswered: 0.0,
+            answered_after: 0,
         }
     }
 }

@@ -89,6 +89,10 @@ pub struct Sac {
     act_ws: MlpWorkspace,
     eval_ws: MlpWorkspace,
     act_noise: Vec<f32>,
+    /// The answered mix's weight on unanswered rows as the run sets it for now (the gate of
+    /// `answered_after`), in place of the config's `unanswered`; not checkpointed: the run
+    /// sets it before every update.
+    unanswered_override: Option<f32>,
 }
 
 impl Sac {
@@ -146,6 +150,7 @@ impl Sac {
             act_ws: actor.workspace(1),
             eval_ws: q1.workspace(1),
             act_noise: vec![0.0; act_dim],
+            unanswered_override: None,
             updates: 0,
             buffers,
             human_critic,
@@ -161,6 +166,12 @@ impl Sac {
 
     pub fn config(&self) -> &SacConfig {
         &self.config
+    }
+
+    /// With the answered mix: read H on unanswered rows at this share of its weight from the
+    /// next update on (`None`: the config's `unanswered`).
+    pub fn set_unanswered_override(&mut self, weight: Option<f32>) {
+        self.unanswered_override = weight;
     }
 
     pub fn obs_dim(&self) -> usize {

@@ -172,13 +172,19 @@ impl Sac {
     /// - [`ActorMix::Authors`]: `mean(ent_coef log_pi - min_j (w_q Q_j + w_h H_j))`,
     ///   `w_q = 1 / (1 + lambda)`, `w_h = lambda / (1 + lambda)` (their `0.1 Q + 0.9 H`);
     /// - [`ActorMix::Paper`]: `mean(ent_coef log_pi - (min_j Q_j + lambda min_j H_j))`;
-    /// - [`ActorMix::Answered`]: the authors' mix with `w_h` times `unanswered` (0 by default) on
-    ///   the rows whose stored H is 0 (no answer).
+    /// - [`ActorMix::Answered`]: the authors' mix with `w_h` times `unanswered` (0 by default,
+    ///   or what the run's gate set) on the rows whose stored H is 0 (no answer).
     ///
     /// The critics are frozen: each passes dL/d a_pi back through `backward_input` only. Then
     /// `squashed_gaussian::backward` adds the path through `log_pi` and takes both to
     /// `[mu; log_std]`, and the actor's own backward pass.
     pub(super) fn actor_loss(&mut self, ent_coef: f32) -> f32 {
+        let configured = self
+            .config
+            .human_critic
+            .as_ref()
+            .map_or(0.0, |c| c.unanswered);
+        let unanswered = self.unanswered_override.unwrap_or(configured);
         let b = &mut self.buffers;
         let n = b.log_pi.len();
         let inv_n = 1.0 / n as f32;
@@ -245,7 +251,7 @@ impl Sac {
                             let w_h = if answered {
                                 lambda / (1.0 + lambda)
                             } else {
-                                config.unanswered * lambda / (1.0 + lambda)
+                                unanswered * lambda / (1.0 + lambda)
                             };
                             let mixed = [w_q * q[0] + w_h * h[0], w_q * q[1] + w_h * h[1]];
                             let first = mixed[0] <= mixed[1];

@@ -152,6 +152,7 @@ fn an_anchored_critic_still_learns_from_a_batch_without_feedback() {
         mask: true,
         anchor: 0.1,
         unanswered: 0.0,
+        answered_after: 0,
         ..HumanCriticConfig::default()
     };
     let mut sac = tiny(Some(human));
@@ -212,6 +213,7 @@ fn actor_loss_gradient_authors_mix() {
         mask: false,
         anchor: 0.0,
         unanswered: 0.0,
+        answered_after: 0,
     };
     actor_case("actor loss, authors' mix", Some(human));
 }
@@ -224,6 +226,7 @@ fn actor_loss_gradient_paper_mix() {
         mask: false,
         anchor: 0.0,
         unanswered: 0.0,
+        answered_after: 0,
     };
     actor_case("actor loss, paper's mix", Some(human));
 }
@@ -237,6 +240,7 @@ fn actor_loss_gradient_answered_mix() {
             mask: true,
             anchor: 0.0,
             unanswered,
+            answered_after: 0,
         };
         actor_case(
             &format!("actor loss, answered mix, unanswered {unanswered}"),
@@ -258,6 +262,7 @@ fn answered_mix_reads_h_on_answered_rows_only() {
             mask: true,
             anchor: 0.0,
             unanswered,
+            answered_after: 0,
         };
         let mut sac = tiny(Some(config));
         sac.buffers.batch.human.fill(human);

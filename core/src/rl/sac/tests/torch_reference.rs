@@ -169,6 +169,7 @@ fn dref_with_the_authors_mix_agrees_with_pytorch() {
             mask: false,
             anchor: 0.0,
             unanswered: 0.0,
+            answered_after: 0,
         };
         let worst = check(
             Some(human),
@@ -189,6 +190,7 @@ fn dref_with_the_paper_mix_and_mask_agrees_with_pytorch() {
             mask: true,
             anchor: 0.0,
             unanswered: 0.0,
+            answered_after: 0,
         };
         let worst = check(
             Some(human),
