@@ -51,18 +51,25 @@ fn settings_override_every_sac_key() {
             anchor: 0.25,
             unanswered: 0.0,
             answered_after: 0,
+            agree_within: 0.0,
         })
     );
     let answered = sac_with(&[
         ("mix", "answered"),
         ("mix_unanswered", "0.3"),
         ("mix_answered_after", "10"),
+        ("mix_agree_within", "0.2"),
     ])
     .unwrap();
     let critic = answered.human_critic.unwrap();
     assert_eq!(
-        (critic.mix, critic.unanswered, critic.answered_after),
-        (ActorMix::Answered, 0.3, 10)
+        (
+            critic.mix,
+            critic.unanswered,
+            critic.answered_after,
+            critic.agree_within
+        ),
+        (ActorMix::Answered, 0.3, 10, 0.2)
     );
     let c = sac_with(&[("target_entropy", "-3"), ("target_entropy", "auto")]).unwrap();
     assert_eq!(c.target_entropy, None);
@@ -98,6 +105,8 @@ fn settings_reject_unknown_keys_and_bad_values_clearly() {
         ("mix_unanswered", "0.3", "mix = \"answered\""),
         ("mix_answered_after", "10", "mix = \"answered\""),
         ("mix_answered_after", "-1", "invalid"),
+        ("mix_agree_within", "-0.1", ">= 0"),
+        ("mix_agree_within", "0.2", "mix = \"answered\""),
     ] {
         let err = sac_with(&[(k, v)]).expect_err(&format!("{k}={v} accepted"));
         assert_eq!(err.key(), Some(k), "{k}={v}: {err:?} should name its key");

@@ -51,6 +51,7 @@ fn per_task_table() {
                 anchor: 0.0,
                 unanswered: 0.0,
                 answered_after: 0,
+                agree_within: 0.0,
             })
         );
     }

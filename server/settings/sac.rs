@@ -86,6 +86,10 @@ pub struct HumanCriticSection {
     /// N-th successful episode, and as `mix_unanswered` says after it (0: from the start).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mix_answered_after: Option<u32>,
+    /// With `mix = "answered"`: an unanswered transition where the human critic's two heads
+    /// agree within this much is read as an answered one (0: off).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mix_agree_within: Option<f32>,
 }
 
 /// `hidden` as a list of layer sizes, the CLI's comma-separated text, or one number.
@@ -179,6 +183,7 @@ impl HumanCriticSection {
             human_critic_anchor: Some(critic.anchor),
             mix_unanswered: Some(critic.unanswered),
             mix_answered_after: Some(critic.answered_after),
+            mix_agree_within: Some(critic.agree_within),
         }
     }
 
@@ -241,6 +246,21 @@ impl HumanCriticSection {
                 ));
             }
             critic(sac).answered_after = n;
+        }
+        if let Some(d) = self.mix_agree_within {
+            if !(d.is_finite() && d >= 0.0) {
+                return Err(SettingsError::bad(
+                    "mix_agree_within",
+                    format!("expected a number >= 0, got {d}"),
+                ));
+            }
+            if d > 0.0 && critic(sac).mix != ActorMix::Answered {
+                return Err(SettingsError::bad(
+                    "mix_agree_within",
+                    "widens the answered mix: set mix = \"answered\" too",
+                ));
+            }
+            critic(sac).agree_within = d;
         }
         Ok(())
     }

@@ -62,6 +62,13 @@ pub struct HumanCriticConfig {
     /// where people answered. 0: no gate. Left out of a run's config while 0.
     #[serde(default, skip_serializing_if = "is_zero_count")]
     pub answered_after: u32,
+    /// `mix_agree_within` (our choice, with [`ActorMix::Answered`]): on an unanswered row where
+    /// the two heads of H differ by at most this much, the actor reads H at full weight, as
+    /// on an answered one. H is in the answers' units (+1 / -1), so one number serves every
+    /// task: where the heads agree the answers around constrain H, where they part it is
+    /// extrapolating and the actor follows Q. 0: off. Left out of a run's config while 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub agree_within: f32,
 }
 
 fn is_zero(x: &f32) -> bool {
@@ -81,6 +88,7 @@ impl Default for HumanCriticConfig {
             anchor: 0.0,
             unanswered: 0.0,
             answered_after: 0,
+            agree_within: 0.0,
         }
     }
 }

@@ -173,7 +173,8 @@ impl Sac {
     ///   `w_q = 1 / (1 + lambda)`, `w_h = lambda / (1 + lambda)` (their `0.1 Q + 0.9 H`);
     /// - [`ActorMix::Paper`]: `mean(ent_coef log_pi - (min_j Q_j + lambda min_j H_j))`;
     /// - [`ActorMix::Answered`]: the authors' mix with `w_h` times `unanswered` (0 by default,
-    ///   or what the run's gate set) on the rows whose stored H is 0 (no answer).
+    ///   or what the run's gate set) on the rows whose stored H is 0 (no answer), unless the
+    ///   heads of H agree there within `agree_within`.
     ///
     /// The critics are frozen: each passes dL/d a_pi back through `backward_input` only. Then
     /// `squashed_gaussian::backward` adds the path through `log_pi` and takes both to
@@ -245,8 +246,12 @@ impl Sac {
                             // The authors' head-wise mix: min_j(0.1 Q_j + 0.9 H_j) at lambda = 9;
                             // `Answered` keeps `unanswered` of H's weight (by default none) on a
                             // row nobody answered.
-                            let answered =
-                                config.mix == ActorMix::Authors || b.batch.human[i] != 0.0;
+                            // An unanswered row whose heads agree within `agree_within` counts
+                            // as answered (H is constrained there, not extrapolated).
+                            let agree = (h[0] - h[1]).abs() <= config.agree_within;
+                            let answered = config.mix == ActorMix::Authors
+                                || b.batch.human[i] != 0.0
+                                || (config.agree_within > 0.0 && agree);
                             let w_q = 1.0 / (1.0 + lambda);
                             let w_h = if answered {
                                 lambda / (1.0 + lambda)

@@ -170,6 +170,7 @@ fn dref_with_the_authors_mix_agrees_with_pytorch() {
             anchor: 0.0,
             unanswered: 0.0,
             answered_after: 0,
+            agree_within: 0.0,
         };
         let worst = check(
             Some(human),
@@ -191,6 +192,7 @@ fn dref_with_the_paper_mix_and_mask_agrees_with_pytorch() {
             anchor: 0.0,
             unanswered: 0.0,
             answered_after: 0,
+            agree_within: 0.0,
         };
         let worst = check(
             Some(human),
