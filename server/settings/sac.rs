@@ -230,21 +230,16 @@ impl HumanCriticSection {
                     format!("expected a share between 0 and 1, got {w}"),
                 ));
             }
-            if w > 0.0 && critic(sac).mix != ActorMix::Answered {
-                return Err(SettingsError::bad(
-                    "mix_unanswered",
-                    "weighs H on unanswered transitions of the answered mix: set mix = \"answered\" too",
-                ));
-            }
+            answered_mix_only(
+                sac,
+                "mix_unanswered",
+                w > 0.0,
+                "weighs H on unanswered transitions of the answered mix",
+            )?;
             critic(sac).unanswered = w;
         }
         if let Some(n) = self.mix_answered_after {
-            if n > 0 && critic(sac).mix != ActorMix::Answered {
-                return Err(SettingsError::bad(
-                    "mix_answered_after",
-                    "gates the answered mix: set mix = \"answered\" too",
-                ));
-            }
+            answered_mix_only(sac, "mix_answered_after", n > 0, "gates the answered mix")?;
             critic(sac).answered_after = n;
         }
         if let Some(d) = self.mix_agree_within {
@@ -254,16 +249,28 @@ impl HumanCriticSection {
                     format!("expected a number >= 0, got {d}"),
                 ));
             }
-            if d > 0.0 && critic(sac).mix != ActorMix::Answered {
-                return Err(SettingsError::bad(
-                    "mix_agree_within",
-                    "widens the answered mix: set mix = \"answered\" too",
-                ));
-            }
+            answered_mix_only(sac, "mix_agree_within", d > 0.0, "widens the answered mix")?;
             critic(sac).agree_within = d;
         }
         Ok(())
     }
+}
+
+/// A setting that refines the answered mix, given a value that does something (`set`) while
+/// the mix is another: refused, naming the key and what it would have done.
+fn answered_mix_only(
+    sac: &mut SacConfig,
+    key: &'static str,
+    set: bool,
+    what: &str,
+) -> Result<(), SettingsError> {
+    if set && critic(sac).mix != ActorMix::Answered {
+        return Err(SettingsError::bad(
+            key,
+            format!("{what}: set mix = \"answered\" too"),
+        ));
+    }
+    Ok(())
 }
 
 /// The human critic's config, switched on (with defaults) if it was off.
