@@ -245,13 +245,12 @@ impl Sac {
                         ActorMix::Authors | ActorMix::Answered => {
                             // The authors' head-wise mix: min_j(0.1 Q_j + 0.9 H_j) at lambda = 9;
                             // `Answered` keeps `unanswered` of H's weight (by default none) on a
-                            // row nobody answered.
-                            // An unanswered row whose heads agree within `agree_within` counts
-                            // as answered (H is constrained there, not extrapolated).
-                            let agree = (h[0] - h[1]).abs() <= config.agree_within;
-                            let answered = config.mix == ActorMix::Authors
-                                || b.batch.human[i] != 0.0
-                                || (config.agree_within > 0.0 && agree);
+                            // row nobody answered, unless its heads agree within `agree_within`
+                            // (H is constrained there, not extrapolated).
+                            let agree = config.agree_within > 0.0
+                                && (h[0] - h[1]).abs() <= config.agree_within;
+                            let answered =
+                                config.mix == ActorMix::Authors || b.batch.human[i] != 0.0 || agree;
                             let w_q = 1.0 / (1.0 + lambda);
                             let w_h = if answered {
                                 lambda / (1.0 + lambda)

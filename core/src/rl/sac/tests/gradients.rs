@@ -151,9 +151,6 @@ fn an_anchored_critic_still_learns_from_a_batch_without_feedback() {
     let human = HumanCriticConfig {
         mask: true,
         anchor: 0.1,
-        unanswered: 0.0,
-        answered_after: 0,
-        agree_within: 0.0,
         ..HumanCriticConfig::default()
     };
     let mut sac = tiny(Some(human));
@@ -265,6 +262,60 @@ fn actor_loss_gradient_answered_mix_where_the_heads_agree() {
         agree_within: 0.05,
     };
     actor_case("actor loss, answered mix, heads agreeing", Some(human));
+}
+
+/// The answered mix reads H only on answered rows: with no answer in the batch the loss is the
+/// authors' mix with H = 0 (whatever H says), and with every row answered it is the authors' mix.
+/// With `unanswered = 1` it is the authors' mix everywhere, and in between it reads H on silent
+/// rows at that share of its weight.
+#[test]
+fn answered_mix_reads_h_on_answered_rows_only() {
+    let with = |mix: ActorMix, unanswered: f32, human: f32, scale_h: f32| {
+        let config = HumanCriticConfig {
+            lambda: 9.0,
+            mix,
+            mask: true,
+            anchor: 0.0,
+            unanswered,
+            answered_after: 0,
+            agree_within: 0.0,
+        };
+        let mut sac = tiny(Some(config));
+        sac.buffers.batch.human.fill(human);
+        for p in sac.human_critic.as_mut().unwrap().h1.params_mut() {
+            *p *= scale_h;
+        }
+        sac.sample_policy_at_obs();
+        sac.actor_loss(ENT_COEF)
+    };
+    let silent = with(ActorMix::Answered, 0.0, 0.0, 1.0);
+    assert_eq!(
+        silent,
+        with(ActorMix::Answered, 0.0, 0.0, 3.0),
+        "H unread on silent rows"
+    );
+    let authors = with(ActorMix::Authors, 0.0, 0.0, 1.0);
+    assert_ne!(silent, authors, "the authors' mix reads H");
+    assert_eq!(
+        with(ActorMix::Answered, 0.0, 1.0, 1.0),
+        with(ActorMix::Authors, 0.0, 1.0, 1.0),
+        "every row answered: the authors' mix"
+    );
+    assert_eq!(
+        with(ActorMix::Answered, 1.0, 0.0, 1.0),
+        authors,
+        "unanswered = 1: the authors' mix on silent rows too"
+    );
+    let partial = with(ActorMix::Answered, 0.3, 0.0, 1.0);
+    assert_ne!(
+        partial,
+        with(ActorMix::Answered, 0.3, 0.0, 3.0),
+        "unanswered = 0.3 reads H on silent rows"
+    );
+    assert!(
+        partial != silent && partial != authors,
+        "0.3 is neither end: {silent} {partial} {authors}"
+    );
 }
 
 /// `agree_within`: an unanswered row counts as answered where the heads of H agree within it;
