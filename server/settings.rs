@@ -42,7 +42,7 @@ mod sac;
 mod session;
 mod task_version;
 
-pub use as_run::{AsRunSection, Profile, SceneGraphChoice};
+pub use as_run::{AsRunSection, Profile, SceneGraphChoice, time_limit_as_run};
 pub use combine::Combine;
 pub use error::SettingsError;
 pub use evaluative::EvaluativeSection;

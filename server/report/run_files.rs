@@ -11,6 +11,9 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use serde::Deserialize;
 
+use crate::guidance::evaluative_run::{GraphAtEpisodeEnd, TimeLimitEnd};
+use crate::guidance::feedback_schedule::EvaluativeMethod;
+use crate::settings::time_limit_as_run;
 use crate::sim::Task;
 
 /// The file whose presence marks a run as finished (written last by `train` and `prefs`).
@@ -71,15 +74,22 @@ pub struct TrainSummary {
 pub struct RunConfigSeen {
     /// `reset` for the authors' runs as run (`profile = "as-run"` sets it on every task).
     #[serde(default)]
-    pub graph_at_episode_end: crate::guidance::evaluative_run::GraphAtEpisodeEnd,
+    pub graph_at_episode_end: GraphAtEpisodeEnd,
+    /// How a time limit's end was stored (runs written before the setting: as a truncation).
+    #[serde(default)]
+    pub time_limit: TimeLimitEnd,
 }
 
 impl TrainRun {
-    /// Whether the run ran the authors' runs' behaviour at episode ends, which every task's
-    /// `profile = "as-run"` has (and the head's constants do not).
+    /// Whether the run is one of `profile = "as-run"`: it read the scene graph at episode ends
+    /// the authors' way, which every task's profile does (and the head's constants do not); or
+    /// it is SAC, which reads no graph, oracle or rule, with the profile's time limit on its
+    /// task (Lunar Lander's head SAC runs are the profile's: issue 33 reuses them).
     pub fn ran_as_run(&self) -> bool {
-        self.summary.config.graph_at_episode_end
-            == crate::guidance::evaluative_run::GraphAtEpisodeEnd::Reset
+        let config = &self.summary.config;
+        config.graph_at_episode_end == GraphAtEpisodeEnd::Reset
+            || (self.key.method == EvaluativeMethod::Sac.to_string()
+                && config.time_limit == time_limit_as_run(self.key.task))
     }
 }
 
@@ -289,5 +299,37 @@ mod tests {
         // Runs written before the setting existed, or without a config, ran the head's way.
         assert!(!run(r#", "config": {"task": "placing"}"#).ran_as_run());
         assert!(!run("").ran_as_run());
+    }
+
+    #[test]
+    fn a_sac_run_is_the_profiles_where_its_time_limit_is() {
+        let sac = |task: Task, config: &str| TrainRun {
+            key: RunKey {
+                task,
+                method: "sac".into(),
+                seed: 0,
+            },
+            episodes: Vec::new(),
+            summary: summary(config),
+        };
+        let head = r#", "config": {"graph_at_episode_end": "step", "time_limit": "truncation"}"#;
+        // Lunar Lander's profile keeps Gymnasium's truncation: the head's SAC run is its run,
+        // and so is one written before either setting existed.
+        assert!(sac(Task::LunarLander, head).ran_as_run());
+        assert!(sac(Task::LunarLander, r#", "config": {}"#).ran_as_run());
+        // Placing's and Reaching's store robosuite's limit as terminal: the head's run is not.
+        assert!(!sac(Task::Placing, head).ran_as_run());
+        assert!(!sac(Task::Reaching, head).ran_as_run());
+        assert!(sac(Task::Reaching, r#", "config": {"time_limit": "terminal"}"#).ran_as_run());
+        // Only SAC reads nothing else of the profile.
+        let ef = TrainRun {
+            key: RunKey {
+                task: Task::LunarLander,
+                method: "ef-100".into(),
+                seed: 0,
+            },
+            ..sac(Task::LunarLander, head)
+        };
+        assert!(!ef.ran_as_run());
     }
 }

@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use super::SettingsError;
 use crate::guidance::evaluative_run::{EvaluativeRunConfig, GraphAtEpisodeEnd, TimeLimitEnd};
+use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::scene_graph::SceneGraph;
 use crate::sim::{Task, TaskRef};
 
@@ -107,6 +108,16 @@ impl AsRunSection {
         }
         Ok(())
     }
+}
+
+/// How the authors' published runs of `task` stored a time limit's end: all a SAC run (no
+/// oracle, no scene graph, no query rule) takes from the profile, so a SAC run of the head's
+/// constants with this time limit is a run of the profile too (the report reuses Lunar Lander's
+/// 150k SAC runs that way).
+pub fn time_limit_as_run(task: Task) -> TimeLimitEnd {
+    let mut config = EvaluativeRunConfig::new(task, EvaluativeMethod::Sac, 0);
+    apply(&mut config).expect("the profile applies to every task of ours");
+    config.time_limit
 }
 
 /// The as-run values on `config`'s task:
