@@ -52,6 +52,7 @@ fn per_task_table() {
                 unanswered: 0.0,
                 answered_after: 0,
                 agree_within: 0.0,
+                failure_window: 0,
             })
         );
     }

@@ -90,6 +90,10 @@ pub struct HumanCriticSection {
     /// agree within this much is read as an answered one (0: off).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mix_agree_within: Option<f32>,
+    /// With `mix = "answered"`: the actor reads H on unanswered transitions at the share of
+    /// the run's last N episodes that failed, at least `mix_unanswered` (0: off).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mix_failure_window: Option<u32>,
 }
 
 /// `hidden` as a list of layer sizes, the CLI's comma-separated text, or one number.
@@ -184,6 +188,7 @@ impl HumanCriticSection {
             mix_unanswered: Some(critic.unanswered),
             mix_answered_after: Some(critic.answered_after),
             mix_agree_within: Some(critic.agree_within),
+            mix_failure_window: Some(critic.failure_window),
         }
     }
 
@@ -251,6 +256,10 @@ impl HumanCriticSection {
             }
             answered_mix_only(sac, "mix_agree_within", d > 0.0, "widens the answered mix")?;
             critic(sac).agree_within = d;
+        }
+        if let Some(n) = self.mix_failure_window {
+            answered_mix_only(sac, "mix_failure_window", n > 0, "gates the answered mix")?;
+            critic(sac).failure_window = n;
         }
         Ok(())
     }

@@ -22,6 +22,7 @@ pub use super::evaluative_config::{
 use super::ask_pacing::AskPacing;
 use super::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
 use super::feedback_schedule::FeedbackSchedule;
+use super::mix_gate::{self, MixGate};
 use crate::rl::replay::{ReplayBuffer, Transition};
 use crate::rl::{Sac, UpdateStats};
 use crate::scene_graph::AbstractState;
@@ -94,6 +95,8 @@ pub struct EvaluativeRun {
     cumulative_return: f64,
     /// Episodes that ended in success (the gate of `answered_after`).
     successes: u64,
+    /// The last episodes' outcomes, for the gate of `failure_window`.
+    mix_gate: MixGate,
     feedback_count: u64,
     no_feedback_count: u64,
     /// Queries the method wanted that a person's pace held back.
@@ -155,6 +158,7 @@ impl EvaluativeRun {
             episode_length: 0,
             cumulative_return: 0.0,
             successes: 0,
+            mix_gate: MixGate::default(),
             feedback_count: 0,
             no_feedback_count: 0,
             held_back: 0,
@@ -191,13 +195,7 @@ impl EvaluativeRun {
     /// the run has had fewer successful episodes than that, so the actor still reads H on
     /// unanswered rows at full weight.
     pub fn reads_h_everywhere(&self) -> bool {
-        let after = self
-            .config
-            .sac
-            .human_critic
-            .as_ref()
-            .map_or(0, |c| c.answered_after);
-        self.successes < u64::from(after)
+        mix_gate::reads_h_everywhere(self.successes, self.config.sac.human_critic.as_ref())
     }
 
     /// Queries asked so far.
@@ -316,7 +314,8 @@ impl EvaluativeRun {
             self.queried.push((self.steps, slot));
         }
         self.pacing.step(self.steps, evaluation.is_some());
-        let gate = self.reads_h_everywhere().then_some(1.0);
+        let critic = self.config.sac.human_critic.as_ref();
+        let gate = self.mix_gate.unanswered_weight(self.successes, critic);
         self.learner.set_unanswered_override(gate);
         let update = self.learner.update(&self.replay);
 
@@ -372,6 +371,8 @@ impl EvaluativeRun {
     fn finish_episode(&mut self, outcome: Outcome) -> Result<EpisodeRecord, EnvFault> {
         self.cumulative_return += self.episode_return;
         self.successes += u64::from(outcome == Outcome::Success);
+        let critic = self.config.sac.human_critic.as_ref();
+        self.mix_gate.record(outcome == Outcome::Success, critic);
         let record = EpisodeRecord {
             step: self.steps,
             episode: self.episodes,

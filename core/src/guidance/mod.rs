@@ -10,6 +10,8 @@
 //! - `expert_oracle`: the synthetic trainer, a SAC expert's critic judging the learner's action.
 //! - `teacher`: simulated teachers' faults after B-Pref (Boltzmann rationality, myopia, errors,
 //!   skip and "about equal" thresholds), shared by both synthetic oracles.
+//! - `mix_gate`: the answered mix's gates on the run's own outcomes (how much of H the actor
+//!   reads where nobody answered).
 //! - `human_pace`: at most N queries a minute, for people (the query rule still picks which).
 //! - `agreement`: how much trainers agree (Krippendorff's alpha, Fleiss' kappa).
 //! - `evaluative_config`: what defines a run (task, method, constants; its `config.json`).
@@ -31,6 +33,7 @@ pub mod evaluative_trainer;
 pub mod expert_oracle;
 pub mod feedback_schedule;
 pub mod human_pace;
+pub mod mix_gate;
 pub mod query_rule;
 pub mod recent_visits;
 pub mod teacher;

@@ -16,6 +16,7 @@ use super::{EvaluativeRun, EvaluativeRunConfig, EvaluativeTrainer};
 use crate::guidance::ask_pacing::AskPacing;
 use crate::guidance::evaluative_trainer::RestoreError;
 use crate::guidance::feedback_schedule::FeedbackSchedule;
+use crate::guidance::mix_gate::MixGate;
 use crate::guidance::query_rule::QueryRule;
 use crate::rl::kernels::{self, KernelPath};
 use crate::rl::replay::{ReplayBuffer, ReplayBytesError, ReplayLayout};
@@ -67,6 +68,10 @@ struct RunState {
     /// no gate that counts them).
     #[serde(default)]
     successes: u64,
+    /// The last episodes' outcomes kept for `failure_window` (checkpoints written before it
+    /// existed read as none: their runs had no such gate).
+    #[serde(default)]
+    mix_gate: MixGate,
     feedback_count: u64,
     no_feedback_count: u64,
     /// Queries a person's pace held back (checkpoints written before it existed read as 0).
@@ -149,6 +154,7 @@ impl EvaluativeRun {
             episodes: self.episodes,
             cumulative_return: self.cumulative_return,
             successes: self.successes,
+            mix_gate: self.mix_gate.clone(),
             feedback_count: self.feedback_count,
             no_feedback_count: self.no_feedback_count,
             held_back: self.held_back,
@@ -263,6 +269,7 @@ impl EvaluativeRun {
             episode_length: 0,
             cumulative_return: state.cumulative_return,
             successes: state.successes,
+            mix_gate: state.mix_gate,
             feedback_count: state.feedback_count,
             no_feedback_count: state.no_feedback_count,
             held_back: state.held_back,

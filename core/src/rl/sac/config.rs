@@ -69,6 +69,15 @@ pub struct HumanCriticConfig {
     /// extrapolating and the actor follows Q. 0: off. Left out of a run's config while 0.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub agree_within: f32,
+    /// `mix_failure_window` (our choice, with [`ActorMix::Answered`]): the actor reads H on
+    /// unanswered rows at the share of the run's last N episodes that failed (at least
+    /// `unanswered`; episodes not yet run count as failed). `answered_after` shuts H's
+    /// extrapolation off for good at the N-th success, and on Placing the learner then lost
+    /// the task; this gate follows the learner both ways: while it fails it follows the
+    /// critic's extrapolation of the answers, as it succeeds it follows Q where nobody
+    /// answered. 0: off. Left out of a run's config while 0.
+    #[serde(default, skip_serializing_if = "is_zero_count")]
+    pub failure_window: u32,
 }
 
 fn is_zero(x: &f32) -> bool {
@@ -89,6 +98,7 @@ impl Default for HumanCriticConfig {
             unanswered: 0.0,
             answered_after: 0,
             agree_within: 0.0,
+            failure_window: 0,
         }
     }
 }

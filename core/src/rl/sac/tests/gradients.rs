@@ -213,6 +213,7 @@ fn actor_loss_gradient_authors_mix() {
         unanswered: 0.0,
         answered_after: 0,
         agree_within: 0.0,
+        failure_window: 0,
     };
     actor_case("actor loss, authors' mix", Some(human));
 }
@@ -227,6 +228,7 @@ fn actor_loss_gradient_paper_mix() {
         unanswered: 0.0,
         answered_after: 0,
         agree_within: 0.0,
+        failure_window: 0,
     };
     actor_case("actor loss, paper's mix", Some(human));
 }
@@ -242,6 +244,7 @@ fn actor_loss_gradient_answered_mix() {
             unanswered,
             answered_after: 0,
             agree_within: 0.0,
+            failure_window: 0,
         };
         actor_case(
             &format!("actor loss, answered mix, unanswered {unanswered}"),
@@ -260,6 +263,7 @@ fn actor_loss_gradient_answered_mix_where_the_heads_agree() {
         unanswered: 0.0,
         answered_after: 0,
         agree_within: 0.05,
+        failure_window: 0,
     };
     actor_case("actor loss, answered mix, heads agreeing", Some(human));
 }
@@ -279,6 +283,7 @@ fn answered_mix_reads_h_on_answered_rows_only() {
             unanswered,
             answered_after: 0,
             agree_within: 0.0,
+            failure_window: 0,
         };
         let mut sac = tiny(Some(config));
         sac.buffers.batch.human.fill(human);
@@ -332,6 +337,7 @@ fn the_answered_mix_reads_h_where_the_heads_agree() {
             unanswered: 0.0,
             answered_after: 0,
             agree_within,
+            failure_window: 0,
         };
         let mut sac = tiny(Some(config));
         sac.buffers.batch.human.fill(0.0);

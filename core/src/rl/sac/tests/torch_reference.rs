@@ -171,6 +171,7 @@ fn dref_with_the_authors_mix_agrees_with_pytorch() {
             unanswered: 0.0,
             answered_after: 0,
             agree_within: 0.0,
+            failure_window: 0,
         };
         let worst = check(
             Some(human),
@@ -193,6 +194,7 @@ fn dref_with_the_paper_mix_and_mask_agrees_with_pytorch() {
             unanswered: 0.0,
             answered_after: 0,
             agree_within: 0.0,
+            failure_window: 0,
         };
         let worst = check(
             Some(human),

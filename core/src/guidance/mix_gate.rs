@@ -1,0 +1,114 @@
+//! The answered mix's gates on the run's own outcomes (`docs/dref.md`): how much of H's weight
+//! the actor keeps on sampled rows nobody answered, set before every update.
+//!
+//! - `mix_answered_after = N`: full weight (the authors' mix) until the run's N-th successful
+//!   episode, the configured `unanswered` share after it, for good.
+//! - `mix_failure_window = N`: the share of the last N episodes that failed (episodes not yet
+//!   run count as failed), at least `unanswered`. The first gate shut H's extrapolation off at
+//!   the N-th success and Placing's learner then lost the task; this one follows the learner
+//!   both ways: failing, it follows the critic's extrapolation of the answers; succeeding, Q.
+
+use std::collections::VecDeque;
+
+use serde::{Deserialize, Serialize};
+
+use crate::rl::HumanCriticConfig;
+
+/// The outcomes of the run's last `failure_window` episodes, oldest first (none while off).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct MixGate {
+    recent: VecDeque<bool>,
+}
+
+impl MixGate {
+    /// Keeps a finished episode's outcome while `failure_window` is on.
+    pub fn record(&mut self, success: bool, critic: Option<&HumanCriticConfig>) {
+        let window = critic.map_or(0, |c| c.failure_window as usize);
+        if window == 0 {
+            return;
+        }
+        if self.recent.len() == window {
+            self.recent.pop_front();
+        }
+        self.recent.push_back(success);
+    }
+
+    /// The weight on unanswered rows for the next update, where a gate sets it (`None`: the
+    /// config's `unanswered`), after `successes` successful episodes.
+    pub fn unanswered_weight(
+        &self,
+        successes: u64,
+        critic: Option<&HumanCriticConfig>,
+    ) -> Option<f32> {
+        let critic = critic?;
+        if reads_h_everywhere(successes, Some(critic)) {
+            return Some(1.0);
+        }
+        let window = critic.failure_window as usize;
+        if window == 0 {
+            return None;
+        }
+        let succeeded = self.recent.iter().filter(|&&s| s).count().min(window);
+        let failed = (window - succeeded) as f32 / window as f32;
+        Some(failed.max(critic.unanswered))
+    }
+}
+
+/// Whether `mix_answered_after`'s gate is open after `successes` successful episodes: the actor
+/// still reads H on unanswered rows at full weight.
+pub fn reads_h_everywhere(successes: u64, critic: Option<&HumanCriticConfig>) -> bool {
+    successes < u64::from(critic.map_or(0, |c| c.answered_after))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn critic(answered_after: u32, failure_window: u32, unanswered: f32) -> HumanCriticConfig {
+        HumanCriticConfig {
+            answered_after,
+            failure_window,
+            unanswered,
+            ..HumanCriticConfig::default()
+        }
+    }
+
+    #[test]
+    fn the_failure_window_reads_h_at_the_share_of_recent_failures() {
+        let c = critic(0, 4, 0.0);
+        let mut gate = MixGate::default();
+        // Episodes not yet run count as failed: a new run follows H everywhere.
+        assert_eq!(gate.unanswered_weight(0, Some(&c)), Some(1.0));
+        for (success, weight) in [
+            (true, 0.75),
+            (true, 0.5),
+            (false, 0.5),
+            (true, 0.25),
+            (true, 0.25), // the first success leaves the window
+            (true, 0.25),
+            (true, 0.0),
+            (false, 0.25),
+        ] {
+            gate.record(success, Some(&c));
+            assert_eq!(gate.unanswered_weight(0, Some(&c)), Some(weight));
+        }
+        // At least the configured share.
+        assert_eq!(
+            gate.unanswered_weight(0, Some(&critic(0, 4, 0.5))),
+            Some(0.5)
+        );
+    }
+
+    #[test]
+    fn the_success_gate_opens_full_until_its_count_and_off_is_off() {
+        let gate = MixGate::default();
+        let c = critic(3, 0, 0.0);
+        assert_eq!(gate.unanswered_weight(2, Some(&c)), Some(1.0));
+        assert_eq!(gate.unanswered_weight(3, Some(&c)), None);
+        assert_eq!(gate.unanswered_weight(0, Some(&critic(0, 0, 0.2))), None);
+        assert_eq!(gate.unanswered_weight(0, None), None);
+        let mut off = MixGate::default();
+        off.record(true, Some(&critic(0, 0, 0.0)));
+        assert_eq!(off, MixGate::default(), "nothing kept while off");
+    }
+}
