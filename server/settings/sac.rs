@@ -94,6 +94,10 @@ pub struct HumanCriticSection {
     /// the run's last N episodes that failed, at least `mix_unanswered` (0: off).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mix_failure_window: Option<u32>,
+    /// With `mix = "answered"`: the share of H's weight the actor does not read on a
+    /// transition goes to Q (each transition's weights sum to 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mix_unread_to_q: Option<bool>,
 }
 
 /// `hidden` as a list of layer sizes, the CLI's comma-separated text, or one number.
@@ -189,6 +193,7 @@ impl HumanCriticSection {
             mix_answered_after: Some(critic.answered_after),
             mix_agree_within: Some(critic.agree_within),
             mix_failure_window: Some(critic.failure_window),
+            mix_unread_to_q: Some(critic.unread_to_q),
         }
     }
 
@@ -260,6 +265,10 @@ impl HumanCriticSection {
         if let Some(n) = self.mix_failure_window {
             answered_mix_only(sac, "mix_failure_window", n > 0, "gates the answered mix")?;
             critic(sac).failure_window = n;
+        }
+        if let Some(on) = self.mix_unread_to_q {
+            answered_mix_only(sac, "mix_unread_to_q", on, "gives Q H's unread weight")?;
+            critic(sac).unread_to_q = on;
         }
         Ok(())
     }

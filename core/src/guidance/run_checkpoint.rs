@@ -348,12 +348,17 @@ mod tests {
             max_per_minute: 3,
             steps_per_minute: 40,
         });
+        // The answered mix gated by the last episodes' outcomes, which the checkpoint keeps.
+        let mut gated = tiny(Task::Placing, "dref");
+        let critic = gated.sac.human_critic.as_mut().unwrap();
+        (critic.mix, critic.failure_window) = (crate::rl::ActorMix::Answered, 3);
         // Tasks whose random episodes are short, so a few hundred steps cross several.
         for (task, method, config) in [
             (Task::Placing, "dref", tiny(Task::Placing, "dref")),
             (Task::Placing, "ef-50", tiny(Task::Placing, "ef-50")),
             (Task::LunarLander, "sac", tiny(Task::LunarLander, "sac")),
             (Task::Placing, "dref paced, faulty teacher", paced),
+            (Task::Placing, "dref, answered mix gated by failures", gated),
         ] {
             let oracle = |task| faulty(task, &config);
             let steps = 600;

@@ -78,6 +78,14 @@ pub struct HumanCriticConfig {
     /// answered. 0: off. Left out of a run's config while 0.
     #[serde(default, skip_serializing_if = "is_zero_count")]
     pub failure_window: u32,
+    /// `mix_unread_to_q` (our choice, with [`ActorMix::Answered`]): the share of H's weight
+    /// the actor does not read on a row goes to Q, so every row's weights sum to 1 (Q alone,
+    /// as SAC, where H is not read at all). Without it a row with H unread keeps Q at 0.1: a
+    /// tenth of the objective the entropy coefficient was tuned against, so the policy turns
+    /// more random until the coefficient catches up. false: off. Left out of a run's config
+    /// while off.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub unread_to_q: bool,
 }
 
 fn is_zero(x: &f32) -> bool {
@@ -99,6 +107,7 @@ impl Default for HumanCriticConfig {
             answered_after: 0,
             agree_within: 0.0,
             failure_window: 0,
+            unread_to_q: false,
         }
     }
 }

@@ -174,7 +174,7 @@ impl Sac {
     /// - [`ActorMix::Paper`]: `mean(ent_coef log_pi - (min_j Q_j + lambda min_j H_j))`;
     /// - [`ActorMix::Answered`]: the authors' mix with `w_h` times `unanswered` (0 by default,
     ///   or what the run's gate set) on the rows whose stored H is 0 (no answer), unless the
-    ///   heads of H agree there within `agree_within`.
+    ///   heads of H agree there within `agree_within`; with `unread_to_q`, `w_q = 1 - w_h`.
     ///
     /// The critics are frozen: each passes dL/d a_pi back through `backward_input` only. Then
     /// `squashed_gaussian::backward` adds the path through `log_pi` and takes both to
@@ -251,11 +251,17 @@ impl Sac {
                                 && (h[0] - h[1]).abs() <= config.agree_within;
                             let answered =
                                 config.mix == ActorMix::Authors || b.batch.human[i] != 0.0 || agree;
-                            let w_q = 1.0 / (1.0 + lambda);
                             let w_h = if answered {
                                 lambda / (1.0 + lambda)
                             } else {
                                 unanswered * lambda / (1.0 + lambda)
+                            };
+                            // With `unread_to_q` the weights sum to 1 on every row (on an
+                            // answered one both ways: 0.1 and 0.9).
+                            let w_q = if config.unread_to_q {
+                                1.0 - w_h
+                            } else {
+                                1.0 / (1.0 + lambda)
                             };
                             let mixed = [w_q * q[0] + w_h * h[0], w_q * q[1] + w_h * h[1]];
                             let first = mixed[0] <= mixed[1];

@@ -214,6 +214,7 @@ fn actor_loss_gradient_authors_mix() {
         answered_after: 0,
         agree_within: 0.0,
         failure_window: 0,
+        unread_to_q: false,
     };
     actor_case("actor loss, authors' mix", Some(human));
 }
@@ -229,6 +230,7 @@ fn actor_loss_gradient_paper_mix() {
         answered_after: 0,
         agree_within: 0.0,
         failure_window: 0,
+        unread_to_q: false,
     };
     actor_case("actor loss, paper's mix", Some(human));
 }
@@ -245,6 +247,7 @@ fn actor_loss_gradient_answered_mix() {
             answered_after: 0,
             agree_within: 0.0,
             failure_window: 0,
+            unread_to_q: false,
         };
         actor_case(
             &format!("actor loss, answered mix, unanswered {unanswered}"),
@@ -264,8 +267,61 @@ fn actor_loss_gradient_answered_mix_where_the_heads_agree() {
         answered_after: 0,
         agree_within: 0.05,
         failure_window: 0,
+        unread_to_q: false,
     };
     actor_case("actor loss, answered mix, heads agreeing", Some(human));
+}
+
+#[test]
+fn actor_loss_gradient_answered_mix_with_h_unread_weight_on_q() {
+    let human = HumanCriticConfig {
+        lambda: 9.0,
+        mix: ActorMix::Answered,
+        mask: true,
+        anchor: 0.0,
+        unanswered: 0.3,
+        answered_after: 0,
+        agree_within: 0.0,
+        failure_window: 0,
+        unread_to_q: true,
+    };
+    actor_case("actor loss, answered mix, unread weight on Q", Some(human));
+}
+
+/// With `unread_to_q` a row whose H is not read at all is SAC's: `ent_coef log_pi - min_j Q_j`,
+/// ten times the Q term the answered mix keeps there otherwise; an answered row is the
+/// authors' mix either way.
+#[test]
+fn h_unread_weight_goes_to_q() {
+    let with = |unread_to_q: bool, human: f32| {
+        let config = HumanCriticConfig {
+            mix: ActorMix::Answered,
+            mask: true,
+            unread_to_q,
+            ..HumanCriticConfig::default()
+        };
+        let mut sac = tiny(Some(config));
+        sac.buffers.batch.human.fill(human);
+        sac.sample_policy_at_obs();
+        let loss = sac.actor_loss(ENT_COEF);
+        let b = &sac.buffers;
+        let n = b.log_pi.len() as f32;
+        let (mut entropy, mut min_q) = (0.0f32, 0.0f32);
+        for i in 0..b.log_pi.len() {
+            entropy += ENT_COEF * b.log_pi[i] / n;
+            min_q += b.q1_ws.output()[i].min(b.q2_ws.output()[i]) / n;
+        }
+        (loss, entropy, min_q)
+    };
+    let (sac_like, entropy, min_q) = with(true, 0.0);
+    assert!((sac_like - (entropy - min_q)).abs() < 1e-5 * (1.0 + sac_like.abs()));
+    let (tenth, ..) = with(false, 0.0);
+    assert!((tenth - (entropy - 0.1 * min_q)).abs() < 1e-5 * (1.0 + tenth.abs()));
+    assert_eq!(
+        with(true, 1.0).0,
+        with(false, 1.0).0,
+        "answered rows: 0.1 and 0.9"
+    );
 }
 
 /// The answered mix reads H only on answered rows: with no answer in the batch the loss is the
@@ -284,6 +340,7 @@ fn answered_mix_reads_h_on_answered_rows_only() {
             answered_after: 0,
             agree_within: 0.0,
             failure_window: 0,
+            unread_to_q: false,
         };
         let mut sac = tiny(Some(config));
         sac.buffers.batch.human.fill(human);
@@ -338,6 +395,7 @@ fn the_answered_mix_reads_h_where_the_heads_agree() {
             answered_after: 0,
             agree_within,
             failure_window: 0,
+            unread_to_q: false,
         };
         let mut sac = tiny(Some(config));
         sac.buffers.batch.human.fill(0.0);
