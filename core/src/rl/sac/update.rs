@@ -251,18 +251,8 @@ impl Sac {
                                 && (h[0] - h[1]).abs() <= config.agree_within;
                             let answered =
                                 config.mix == ActorMix::Authors || b.batch.human[i] != 0.0 || agree;
-                            let w_h = if answered {
-                                lambda / (1.0 + lambda)
-                            } else {
-                                unanswered * lambda / (1.0 + lambda)
-                            };
-                            // With `unread_to_q` the weights sum to 1 on every row (on an
-                            // answered one both ways: 0.1 and 0.9).
-                            let w_q = if config.unread_to_q {
-                                1.0 - w_h
-                            } else {
-                                1.0 / (1.0 + lambda)
-                            };
+                            let read = if answered { 1.0 } else { unanswered };
+                            let (w_q, w_h) = mix_weights(lambda, read, config.unread_to_q);
                             let mixed = [w_q * q[0] + w_h * h[0], w_q * q[1] + w_h * h[1]];
                             let first = mixed[0] <= mixed[1];
                             let j = if first { [1.0, 0.0] } else { [0.0, 1.0] };
@@ -494,4 +484,15 @@ fn add_action_grad(ws: &MlpWorkspace, dl_da: &mut [f32]) {
             *d += g;
         }
     }
+}
+
+/// The authors' weights on Q and H (`1 / (1 + lambda)`, `lambda / (1 + lambda)`) for a row whose
+/// H is read at share `read` of its weight; with `unread_to_q` the unread share goes to Q, so the
+/// two sum to 1. At `read = 1` both forms are the authors' weights to the bit.
+pub(super) fn mix_weights(lambda: f32, read: f32, unread_to_q: bool) -> (f32, f32) {
+    // In this order the weights are the ones runs before `unread_to_q` computed, bit for bit.
+    let w_q = 1.0 / (1.0 + lambda);
+    let w_h = read * lambda / (1.0 + lambda);
+    let unread = lambda / (1.0 + lambda) - w_h;
+    (if unread_to_q { w_q + unread } else { w_q }, w_h)
 }

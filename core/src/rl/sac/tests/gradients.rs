@@ -6,7 +6,7 @@
 //! log-prob) puts it near 1.
 
 use super::{fill_fixed_batch_and_noise, tiny_config};
-use crate::rl::sac::update::temperature_loss;
+use crate::rl::sac::update::{mix_weights, temperature_loss};
 use crate::rl::sac::{ActorMix, HumanCriticConfig, Sac};
 
 const STEP: f32 = 1e-3;
@@ -322,6 +322,12 @@ fn h_unread_weight_goes_to_q() {
         with(false, 1.0).0,
         "answered rows: 0.1 and 0.9"
     );
+    // The weights themselves: the authors' to the bit where H is read in full.
+    let authors = (1.0f32 / 10.0, 9.0f32 / 10.0);
+    assert_eq!(mix_weights(9.0, 1.0, true), authors);
+    assert_eq!(mix_weights(9.0, 1.0, false), authors);
+    assert_eq!(mix_weights(9.0, 0.0, true), (1.0, 0.0));
+    assert_eq!(mix_weights(9.0, 0.0, false), (0.1, 0.0));
 }
 
 /// The answered mix reads H only on answered rows: with no answer in the batch the loss is the
