@@ -52,6 +52,8 @@ fn settings_override_every_sac_key() {
             unanswered: 0.0,
             answered_after: 0,
             agree_within: 0.0,
+            failure_window: 0,
+            unread_to_q: false,
         })
     );
     let answered = sac_with(&[
@@ -59,6 +61,8 @@ fn settings_override_every_sac_key() {
         ("mix_unanswered", "0.3"),
         ("mix_answered_after", "10"),
         ("mix_agree_within", "0.2"),
+        ("mix_failure_window", "10"),
+        ("mix_unread_to_q", "true"),
     ])
     .unwrap();
     let critic = answered.human_critic.unwrap();
@@ -67,9 +71,11 @@ fn settings_override_every_sac_key() {
             critic.mix,
             critic.unanswered,
             critic.answered_after,
-            critic.agree_within
+            critic.agree_within,
+            critic.failure_window,
+            critic.unread_to_q
         ),
-        (ActorMix::Answered, 0.3, 10, 0.2)
+        (ActorMix::Answered, 0.3, 10, 0.2, 10, true)
     );
     let c = sac_with(&[("target_entropy", "-3"), ("target_entropy", "auto")]).unwrap();
     assert_eq!(c.target_entropy, None);
@@ -107,6 +113,10 @@ fn settings_reject_unknown_keys_and_bad_values_clearly() {
         ("mix_answered_after", "-1", "invalid"),
         ("mix_agree_within", "-0.1", ">= 0"),
         ("mix_agree_within", "0.2", "mix = \"answered\""),
+        ("mix_failure_window", "10", "mix = \"answered\""),
+        ("mix_failure_window", "-1", "invalid"),
+        ("mix_unread_to_q", "true", "mix = \"answered\""),
+        ("mix_unread_to_q", "1", "invalid type"),
     ] {
         let err = sac_with(&[(k, v)]).expect_err(&format!("{k}={v} accepted"));
         assert_eq!(err.key(), Some(k), "{k}={v}: {err:?} should name its key");
