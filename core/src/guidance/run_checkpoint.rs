@@ -375,6 +375,7 @@ mod tests {
             }
             let stopped_at = first.steps();
             let successes_at_stop = first.successes();
+            let gate_at_stop = first.mix_gate.clone();
             let bytes = first.checkpoint(&first_oracle, serde_json::json!({"note": stopped_at}));
             drop(first);
             assert_eq!(EvaluativeRun::checkpoint_kernels(&bytes).unwrap(), path);
@@ -385,6 +386,11 @@ mod tests {
             assert_eq!(notes["note"], stopped_at);
             assert_eq!(resumed.steps(), stopped_at);
             assert_eq!(resumed.successes(), successes_at_stop);
+            // The gate's window comes back as it was (for the gated run, with episodes in it).
+            assert_eq!(resumed.mix_gate, gate_at_stop, "{task} {method}");
+            if method.contains("gated") {
+                assert_ne!(gate_at_stop, MixGate::default(), "episodes in the window");
+            }
             let tail = drive(&mut resumed, &mut fresh_oracle, steps);
             let expected: Vec<_> = all
                 .iter()
