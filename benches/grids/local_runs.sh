@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Runs a list of `dualrep train` runs on this machine, PARALLEL at a time, straight into the
+# committed results: a run whose summary.json is already under RESULTS is skipped, a run stopped
+# midway resumes from its checkpoint under SCRATCH, and a finished run's config.json,
+# metrics.csv and summary.json are copied to RESULTS/<dir> at once (commit them as they come).
+# A new machine starts where the repository is: nothing but RESULTS is needed to resume.
+#
+#   nohup bash benches/grids/local_runs.sh BINARY JOBS SCRATCH RESULTS [PARALLEL] > LOG 2>&1 &
+#
+# BINARY: a copy of the release binary outside target/ (the grids' rule). JOBS: one run a line,
+# `<dir under RESULTS> <train arguments...>`, e.g.
+#   dref-ablation/ablation-window/placing/dref-authors/seed4 --task placing --method dref-authors --seed 4 --set rank_window=1000
+# (100,000 steps unless the line sets `--steps`; one thread a run). Lines start in order: put the
+# runs that matter most first.
+set -u
+bin=${1:?the dualrep binary}
+jobs=${2:?the jobs file}
+scratch=${3:?the scratch folder}
+results=${4:?the results folder (docs/results)}
+parallel=${5:-2}
+echo "cpu: $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) cores, avx512f: $(grep -c -m1 avx512f /proc/cpuinfo)"
+echo "binary: $bin ($(sha256sum "$bin" | cut -c1-12))"
+export bin scratch results
+one() {
+  dir=$1
+  shift
+  [ -e "$results/$dir/summary.json" ] && exit 0
+  steps=(--steps 100000)
+  [[ " $* " == *" --steps "* ]] && steps=()
+  mkdir -p "$scratch/$dir"
+  t0=$(date +%s)
+  nice -n 10 "$bin" --threads 1 train "${steps[@]}" --out "$scratch/$dir" "$@" \
+    >> "$scratch/$dir/stdout.log" 2>> "$scratch/$dir/stderr.log"
+  rc=$?
+  if [ $rc -eq 0 ] && [ -e "$scratch/$dir/summary.json" ]; then
+    mkdir -p "$results/$dir"
+    cp "$scratch/$dir/config.json" "$scratch/$dir/metrics.csv" "$results/$dir/"
+    # summary.json last: its presence marks the run finished.
+    cp "$scratch/$dir/summary.json" "$results/$dir/"
+  fi
+  echo "$(date -u +%FT%TZ) rc $rc after $(($(date +%s) - t0)) s: $dir"
+}
+export -f one
+grep -v '^\s*\(#\|$\)' "$jobs" | xargs -P "$parallel" -L 1 bash -c 'one "$@"' _
+echo "$(date -u +%FT%TZ) all lines done"
