@@ -93,7 +93,7 @@ def main() -> None:
                 f"  seed {r['seed']}: {r['cumulative_return'] / 1000:.1f}k at "
                 f"{100 * r['feedback_fraction']:.2f} %, flood after 2k "
                 f"{r.get('longest_flood_after_2k', '-')}, last 10: {r['last10']}, "
-                f"{r['wall_seconds']:.0f} s, {r['kernels']}"
+                f"{r.get('wall_seconds', 0):.0f} s, {r.get('kernels', 'portable')}"
             )
         values = [r["cumulative_return"] for r in rows]
         if values:
