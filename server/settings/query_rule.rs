@@ -31,6 +31,11 @@ pub struct QueryRuleSection {
     /// With a ceiling: at most about this many queries in a row [default 20].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub feedback_burst: Option<u32>,
+    /// With a ceiling: for the run's first N steps ask as without it, and repay the queries
+    /// borrowed from the steps after (the run's total stays under the ceiling); 0: off [default
+    /// 0].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub feedback_opening: Option<u64>,
     /// With a ceiling: let the rate run from this floor (recent answers all "good") up to
     /// `max_feedback_rate` (all "bad"); 0: a fixed rate [default 0].
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -52,6 +57,7 @@ impl QueryRuleSection {
             rank_window: Some(rule.rank_window),
             max_feedback_rate: Some(rule.ceiling.map_or(0.0, |x| x.rate)),
             feedback_burst: Some(rule.ceiling.map_or(DEFAULT_CEILING.burst, |x| x.burst)),
+            feedback_opening: Some(rule.ceiling.map_or(0, |x| x.opening)),
             min_feedback_rate: Some(rule.ceiling.and_then(|x| x.floor).unwrap_or(0.0)),
             wake_after: Some(rule.wake_after),
         }
@@ -90,13 +96,9 @@ impl QueryRuleSection {
             None => {}
             Some(0.0) => rule.ceiling = None,
             Some(r) if r.is_finite() && r > 0.0 && r <= 1.0 => {
-                let (burst, floor) = rule
-                    .ceiling
-                    .map_or((DEFAULT_CEILING.burst, None), |c| (c.burst, c.floor));
                 rule.ceiling = Some(FeedbackCeiling {
                     rate: r,
-                    burst,
-                    floor,
+                    ..rule.ceiling.unwrap_or(DEFAULT_CEILING)
                 });
             }
             Some(r) => {
@@ -141,6 +143,60 @@ impl QueryRuleSection {
                 }
             }
         }
+        if let Some(steps) = self.feedback_opening {
+            match &mut rule.ceiling {
+                Some(c) => c.opening = steps,
+                None if steps == 0 => {}
+                None => {
+                    return Err(SettingsError::bad(
+                        "feedback_opening",
+                        "the rule has no ceiling; set max_feedback_rate too",
+                    ));
+                }
+            }
+        }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::guidance::feedback_schedule::EvaluativeMethod;
+    use crate::settings::Settings;
+    use crate::sim::Task;
+
+    #[test]
+    fn the_opening_is_a_setting_of_the_ceiling_off_by_default() {
+        let plain = Settings::default()
+            .evaluative(Task::Placing, EvaluativeMethod::Dref, 0)
+            .unwrap();
+        assert_eq!(plain.query_rule.ceiling.map(|c| c.opening), Some(0));
+        let opened = Settings::from_pairs([("feedback_opening", "2000")])
+            .unwrap()
+            .evaluative(Task::Placing, EvaluativeMethod::Dref, 0)
+            .unwrap();
+        let ceiling = opened.query_rule.ceiling.unwrap();
+        assert_eq!(
+            (ceiling.rate, ceiling.burst, ceiling.opening),
+            (0.1, 20, 2000)
+        );
+        // The authors' rule has no ceiling to open: refused by name, unless it is 0.
+        let no_ceiling = Settings::from_pairs([("feedback_opening", "2000")])
+            .unwrap()
+            .evaluative(Task::Placing, EvaluativeMethod::DrefAuthors, 0)
+            .unwrap_err()
+            .to_string();
+        assert!(no_ceiling.contains("feedback_opening"), "{no_ceiling}");
+        assert!(no_ceiling.contains("no ceiling"), "{no_ceiling}");
+        assert!(
+            Settings::from_pairs([("feedback_opening", "0")])
+                .unwrap()
+                .evaluative(Task::Placing, EvaluativeMethod::DrefAuthors, 0)
+                .is_ok()
+        );
+        let not_a_number = Settings::from_pairs([("feedback_opening", "-3")])
+            .unwrap_err()
+            .to_string();
+        assert!(not_a_number.contains("feedback_opening"), "{not_a_number}");
     }
 }

@@ -43,6 +43,14 @@ pub struct FeedbackCeiling {
     pub burst: u32,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub floor: Option<f64>,
+    /// For the run's first `opening` steps the rule asks as it would without the ceiling and
+    /// repays what it borrowed afterwards (0: off; configs written before it read as 0).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub opening: u64,
+}
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
 }
 
 /// The product DREF's window: about 1,000 steps is many Placing and Reaching episodes and one or
@@ -57,6 +65,7 @@ pub const DEFAULT_CEILING: FeedbackCeiling = FeedbackCeiling {
     rate: 0.1,
     burst: 20,
     floor: None,
+    opening: 0,
 };
 
 impl QueryRuleConfig {
@@ -98,6 +107,9 @@ impl QueryRuleConfig {
         }
         if let Some(ceiling) = self.ceiling {
             rule = rule.with_ceiling(ceiling.rate, ceiling.burst, ceiling.floor);
+            if ceiling.opening > 0 {
+                rule = rule.opening_for(ceiling.opening);
+            }
         }
         if self.wake_after > 0 {
             rule = rule.waking_after(self.wake_after);

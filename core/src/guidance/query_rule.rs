@@ -139,6 +139,13 @@ impl QueryRule {
         self
     }
 
+    /// With a ceiling: ask as without it for the first `steps` steps, borrowing against the
+    /// ceiling's later earnings ([`AskBudget::opening_for`]).
+    pub fn opening_for(mut self, steps: u64) -> Self {
+        self.budget = self.budget.map(|b| b.opening_for(steps));
+        self
+    }
+
     /// N, the feedback received so far.
     pub fn total_feedback(&self) -> u64 {
         self.total
