@@ -106,10 +106,7 @@ impl QueryRuleConfig {
             rule = rule.ranked_among_recent(self.rank_window);
         }
         if let Some(ceiling) = self.ceiling {
-            rule = rule.with_ceiling(ceiling.rate, ceiling.burst, ceiling.floor);
-            if ceiling.opening > 0 {
-                rule = rule.opening_for(ceiling.opening);
-            }
+            rule = rule.with_ceiling(ceiling.rate, ceiling.burst, ceiling.floor, ceiling.opening);
         }
         if self.wake_after > 0 {
             rule = rule.waking_after(self.wake_after);
