@@ -19,7 +19,10 @@ const TASKS: [Task; 3] = [Task::Reaching, Task::Placing, Task::LunarLander];
 fn evaluative_cases(task: Task) -> Vec<(&'static str, serde_json::Value)> {
     let mut cases = vec![
         ("defaults", json!({})),
-        ("rank_window", json!({"rank_window": 0})),
+        (
+            "recent_rank",
+            json!({"rank_window": 1000, "wake_after": 0, "feedback_opening": 0}),
+        ),
         (
             "ceiling",
             json!({"max_feedback_rate": 0.1, "min_feedback_rate": 0.02, "feedback_burst": 5}),

@@ -1,5 +1,5 @@
 //! DREF's query rule (algorithms.md section 2, docs/dref.md): its constants, the product's
-//! window and ceiling, and the silence wake.
+//! silence wake and ceiling with its opening, and the recent rank's window.
 
 use serde::{Deserialize, Serialize};
 
@@ -21,7 +21,7 @@ pub struct QueryRuleSection {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ucb: Option<UcbForm>,
     /// Rank the current state among those visited in the last N steps; 0: among every state
-    /// with feedback, the authors' [default 1000 for `dref`, 0 for `dref-authors`].
+    /// with feedback, the authors' [default 0; 1000 was `dref`'s recent rank until 2026-11-27].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rank_window: Option<usize>,
     /// Ask on at most this share of steps, in (0, 1]; 0: no ceiling, the authors' [default 0.1
@@ -33,7 +33,7 @@ pub struct QueryRuleSection {
     pub feedback_burst: Option<u32>,
     /// With a ceiling: for the run's first N steps ask as without it, and repay the queries
     /// borrowed from the steps after (the run's total stays under the ceiling); 0: off [default
-    /// 0].
+    /// 2000 for `dref`, 0 otherwise].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub feedback_opening: Option<u64>,
     /// With a ceiling: let the rate run from this floor (recent answers all "good") up to
@@ -42,7 +42,7 @@ pub struct QueryRuleSection {
     pub min_feedback_rate: Option<f64>,
     /// After this many steps without a query, rank the current state among the states visited
     /// during that silence instead of among every state with feedback, until the rule asks
-    /// again; 0: never, the authors' [default 0].
+    /// again; 0: never, the authors' [default 1000 for `dref`, 0 for `dref-authors`].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub wake_after: Option<u64>,
 }
@@ -166,20 +166,26 @@ mod tests {
     use crate::sim::Task;
 
     #[test]
-    fn the_opening_is_a_setting_of_the_ceiling_off_by_default() {
+    fn the_opening_is_a_setting_of_the_ceiling_2000_steps_for_dref() {
         let plain = Settings::default()
             .evaluative(Task::Placing, EvaluativeMethod::Dref, 0)
             .unwrap();
-        assert_eq!(plain.query_rule.ceiling.map(|c| c.opening), Some(0));
-        let opened = Settings::from_pairs([("feedback_opening", "2000")])
-            .unwrap()
-            .evaluative(Task::Placing, EvaluativeMethod::Dref, 0)
-            .unwrap();
-        let ceiling = opened.query_rule.ceiling.unwrap();
+        let ceiling = plain.query_rule.ceiling.unwrap();
         assert_eq!(
             (ceiling.rate, ceiling.burst, ceiling.opening),
             (0.1, 20, 2000)
         );
+        let closed = Settings::from_pairs([("feedback_opening", "0")])
+            .unwrap()
+            .evaluative(Task::Placing, EvaluativeMethod::Dref, 0)
+            .unwrap();
+        assert_eq!(closed.query_rule.ceiling.map(|c| c.opening), Some(0));
+        // A ceiling set on the authors' rule opens only when asked to.
+        let capped = Settings::from_pairs([("max_feedback_rate", "0.1")])
+            .unwrap()
+            .evaluative(Task::Placing, EvaluativeMethod::DrefAuthors, 0)
+            .unwrap();
+        assert_eq!(capped.query_rule.ceiling.map(|c| c.opening), Some(0));
         // The authors' rule has no ceiling to open: refused by name, unless it is 0.
         let no_ceiling = Settings::from_pairs([("feedback_opening", "2000")])
             .unwrap()

@@ -67,7 +67,8 @@ pub struct HumanCriticSection {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lambda: Option<f32>,
     /// How the actor mixes Q and H: `authors` (head-wise), `paper` (Eq. 5) or `answered` (the
-    /// authors' mix where the step was answered, H as 0 elsewhere).
+    /// authors' mix where the step was answered, H as 0 elsewhere) [default `answered` for
+    /// `dref` on Reaching and Lunar Lander, `authors` otherwise].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mix: Option<ActorMix>,
     /// Regress the human critic only on transitions that had feedback.

@@ -479,37 +479,78 @@ fn as_run_switches_are_checked_one_by_one() {
 }
 
 #[test]
-fn the_products_dref_and_the_authors_differ_only_in_their_three_switches() {
-    let dref = Settings::default()
-        .evaluative(Task::Placing, EvaluativeMethod::Dref, 0)
+fn the_products_dref_and_the_authors_differ_only_in_their_switches() {
+    for (task, mix) in [
+        (Task::Placing, ActorMix::Authors),
+        (Task::Reaching, ActorMix::Answered),
+        (Task::LunarLander, ActorMix::Answered),
+    ] {
+        let dref = Settings::default()
+            .evaluative(task, EvaluativeMethod::Dref, 0)
+            .unwrap();
+        let authors = Settings::default()
+            .evaluative(task, EvaluativeMethod::DrefAuthors, 0)
+            .unwrap();
+        let critic = dref.sac.human_critic.as_ref().unwrap();
+        assert!(critic.mask, "{task:?}");
+        assert_eq!(critic.mix, mix, "{task:?}");
+        assert!(!authors.sac.human_critic.as_ref().unwrap().mask);
+        assert_eq!(
+            authors.sac.human_critic.as_ref().unwrap().mix,
+            ActorMix::Authors
+        );
+        // The authors' ranking (no window), woken after 1,000 silent steps, under a 10 %
+        // ceiling that opens with 2,000 steps of the authors' asking.
+        assert_eq!(
+            (dref.query_rule.rank_window, dref.query_rule.wake_after),
+            (0, 1000)
+        );
+        assert_eq!(
+            dref.query_rule
+                .ceiling
+                .map(|c| (c.rate, c.burst, c.opening)),
+            Some((0.1, 20, 2000))
+        );
+        assert_eq!(
+            (authors.query_rule.ceiling, authors.query_rule.wake_after),
+            (None, 0)
+        );
+        // Switched off one by one, the product's rule is the authors' (but for the method's
+        // name).
+        let off = Settings::from_pairs([
+            ("human_critic_mask", "false"),
+            ("mix", "authors"),
+            ("wake_after", "0"),
+            ("max_feedback_rate", "0"),
+        ])
+        .unwrap()
+        .evaluative(task, EvaluativeMethod::Dref, 0)
         .unwrap();
-    let authors = Settings::default()
-        .evaluative(Task::Placing, EvaluativeMethod::DrefAuthors, 0)
-        .unwrap();
-    assert!(dref.sac.human_critic.as_ref().unwrap().mask);
-    assert!(!authors.sac.human_critic.as_ref().unwrap().mask);
-    assert_eq!(dref.query_rule.rank_window, 1000);
-    assert_eq!(authors.query_rule.rank_window, 0);
-    assert_eq!(
-        dref.query_rule.ceiling.map(|c| (c.rate, c.burst)),
-        Some((0.1, 20))
-    );
-    assert_eq!(authors.query_rule.ceiling, None);
-    // Switched off one by one, the product's rule is the authors' (but for the method's name).
-    let off = Settings::from_pairs([
-        ("human_critic_mask", "false"),
-        ("rank_window", "0"),
-        ("max_feedback_rate", "0"),
+        assert_eq!(
+            EvaluativeRunConfig {
+                method: EvaluativeMethod::DrefAuthors,
+                ..off
+            },
+            authors
+        );
+    }
+    // The recent rank, the product's rule before the wake with an opening, is three settings
+    // away.
+    let recent = Settings::from_pairs([
+        ("rank_window", "1000"),
+        ("wake_after", "0"),
+        ("feedback_opening", "0"),
     ])
     .unwrap()
     .evaluative(Task::Placing, EvaluativeMethod::Dref, 0)
     .unwrap();
     assert_eq!(
-        EvaluativeRunConfig {
-            method: EvaluativeMethod::DrefAuthors,
-            ..off
-        },
-        authors
+        (recent.query_rule.rank_window, recent.query_rule.wake_after),
+        (1000, 0)
+    );
+    assert_eq!(
+        recent.query_rule.ceiling.map(|c| (c.rate, c.opening)),
+        Some((0.1, 0))
     );
     let bad = Settings::from_pairs([("max_feedback_rate", "1.5")])
         .unwrap()
@@ -545,16 +586,19 @@ fn the_products_dref_and_the_authors_differ_only_in_their_three_switches() {
 }
 
 #[test]
-fn the_silence_wake_is_a_setting_of_its_own_and_off_by_default() {
-    for method in [EvaluativeMethod::Dref, EvaluativeMethod::DrefAuthors] {
-        let plain = Settings::default()
+fn the_silence_wake_is_a_setting_of_its_own_on_for_dref_only() {
+    let wake = |method| {
+        Settings::default()
             .evaluative(Task::Placing, method, 0)
-            .unwrap();
-        assert_eq!(plain.query_rule.wake_after, 0, "{method:?}");
-    }
-    let waking = Settings::from_pairs([("wake_after", "2000"), ("rank_window", "0")])
+            .unwrap()
+            .query_rule
+            .wake_after
+    };
+    assert_eq!(wake(EvaluativeMethod::Dref), 1000);
+    assert_eq!(wake(EvaluativeMethod::DrefAuthors), 0);
+    let waking = Settings::from_pairs([("wake_after", "2000")])
         .unwrap()
-        .evaluative(Task::Placing, EvaluativeMethod::Dref, 0)
+        .evaluative(Task::Placing, EvaluativeMethod::DrefAuthors, 0)
         .unwrap();
     assert_eq!(
         (waking.query_rule.wake_after, waking.query_rule.rank_window),

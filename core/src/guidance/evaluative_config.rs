@@ -10,12 +10,12 @@ use super::feedback_schedule::EvaluativeMethod;
 use super::human_pace::HumanPace;
 use super::query_rule::{QueryRule, UcbForm};
 use super::teacher::TeacherFaults;
-use crate::rl::{HumanCriticConfig, SacConfig};
+use crate::rl::{ActorMix, HumanCriticConfig, SacConfig};
 use crate::scene_graph::SceneGraph;
 use crate::sim::{DeclaredTask, Env, EnvOptions, Task, TaskRef};
 
 /// DREF's query-rule constants (algorithms.md section 2, from the authors' configs), and the
-/// product rule's two changes (`docs/dref.md`), both off in the authors' rule.
+/// product rule's changes to the query rule (`docs/dref.md`), all off in the authors' rule.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct QueryRuleConfig {
     pub c: f64,
@@ -53,20 +53,26 @@ fn is_zero(n: &u64) -> bool {
     *n == 0
 }
 
-/// The product DREF's window: about 1,000 steps is many Placing and Reaching episodes and one or
-/// two of Lunar Lander's, so the ranked states are those of the learner's current behaviour
-/// (docs/dref.md).
-pub const DEFAULT_RANK_WINDOW: usize = 1_000;
-/// The product DREF's ceiling: 10 % of the steps (the paper's DREF asked 1.6-8.4 %), at most
-/// 20 queries in a row (one second of a human session at 20 Hz). At 5 % the masked critic had
-/// too few answers: Reaching stalled on 4 seeds of 10 and Placing failed on seeds a 10 % ceiling
-/// learns (docs/dref.md, docs/results/dref-ablation/).
+/// A ceiling on the rate, the product DREF's and the one `max_feedback_rate` sets on any rule:
+/// 10 % of the steps (the paper's DREF asked 1.6-8.4 %), at most 20 queries in a row (one second
+/// of a human session at 20 Hz). At 5 % the masked critic had too few answers: Reaching stalled
+/// on 4 seeds of 10 and Placing failed on seeds a 10 % ceiling learns (docs/dref.md,
+/// docs/results/dref-ablation/).
 pub const DEFAULT_CEILING: FeedbackCeiling = FeedbackCeiling {
     rate: 0.1,
     burst: 20,
     floor: None,
     opening: 0,
 };
+/// The product DREF's silence wake: after 1,000 steps without a query the rule ranks the current
+/// state among the states of that silence, so it cannot freeze, and otherwise ranks as the
+/// authors do, among every state with feedback (docs/dref.md).
+pub const DEFAULT_WAKE_AFTER: u64 = 1_000;
+/// The product DREF's opening: the run's first 2,000 steps ask as the authors' rule would (its
+/// first answers are what teach Placing's learner the way), and what they borrow from the
+/// ceiling is repaid before the rule asks again, so a run stays under 10 % + the burst and no
+/// flood passes the 2k grace (docs/dref.md).
+pub const DEFAULT_OPENING: u64 = 2_000;
 
 impl QueryRuleConfig {
     /// The authors' rule on `task` (algorithms.md section 2).
@@ -88,14 +94,23 @@ impl QueryRuleConfig {
 
     /// The rule `method` asks by on `task`: the product's for `dref`, the authors' otherwise.
     pub fn for_method(task: Task, method: EvaluativeMethod) -> Self {
-        let authors = Self::for_task(task);
         match method {
-            EvaluativeMethod::Dref => Self {
-                rank_window: DEFAULT_RANK_WINDOW,
-                ceiling: Some(DEFAULT_CEILING),
-                ..authors
-            },
-            _ => authors,
+            EvaluativeMethod::Dref => Self::for_task(task).products(),
+            _ => Self::for_task(task),
+        }
+    }
+
+    /// The product's rule on these constants (docs/dref.md): the authors' ranking, woken after a
+    /// silence, under a 10 % ceiling that opens with the authors' asking.
+    fn products(self) -> Self {
+        Self {
+            rank_window: 0,
+            ceiling: Some(FeedbackCeiling {
+                opening: DEFAULT_OPENING,
+                ..DEFAULT_CEILING
+            }),
+            wake_after: DEFAULT_WAKE_AFTER,
+            ..self
         }
     }
 
@@ -194,17 +209,34 @@ fn unit_scale() -> f32 {
 /// The human critic `method` learns with: none for plain SAC; the authors' (H regressed on every
 /// sampled step, the unasked ones as 0) for EF and the authors' DREF; regressed on answered
 /// steps only for the product's DREF, whose answers would otherwise be outnumbered by zeros
-/// 30 to 1 at a few percent of feedback (docs/dref.md).
-fn human_critic_for(method: EvaluativeMethod) -> Option<HumanCriticConfig> {
+/// 30 to 1 at a few percent of feedback, and read by the actor with `products_mix`
+/// (docs/dref.md).
+fn human_critic_for(method: EvaluativeMethod, products_mix: ActorMix) -> Option<HumanCriticConfig> {
     match method {
         EvaluativeMethod::Sac => None,
         EvaluativeMethod::Dref => Some(HumanCriticConfig {
             mask: true,
+            mix: products_mix,
             ..HumanCriticConfig::default()
         }),
         EvaluativeMethod::Ef { .. } | EvaluativeMethod::DrefAuthors => {
             Some(HumanCriticConfig::default())
         }
+    }
+}
+
+/// How the product DREF's actor reads the masked human critic on `task`: a per-task constant,
+/// as the paper's c, k and network sizes are (docs/dref.md, "One rule, a mix per task"). Where
+/// the environment's reward leads the learner without a person (SAC alone learns Reaching;
+/// Lunar Lander's shaping rewards every step), H's extrapolation to steps nobody answered costs
+/// reward, so the actor reads H only where a person answered. Where it does not (Placing, which
+/// SAC alone never learns), that extrapolation is what carries the learner to the hoop, so the
+/// actor reads H everywhere, as the authors' code does. A declared task gets the authors' mix
+/// with Placing's c and k.
+pub fn products_mix(task: Task) -> ActorMix {
+    match task {
+        Task::Reaching | Task::LunarLander => ActorMix::Answered,
+        Task::Placing => ActorMix::Authors,
     }
 }
 
@@ -214,7 +246,7 @@ impl EvaluativeRunConfig {
     /// steps only and asks by its own rule (`docs/dref.md`).
     pub fn new(task: Task, method: EvaluativeMethod, seed: u64) -> Self {
         let mut sac = SacConfig::for_task(task);
-        sac.human_critic = human_critic_for(method);
+        sac.human_critic = human_critic_for(method, products_mix(task));
         Self {
             task: task.into(),
             method,
@@ -252,14 +284,10 @@ impl EvaluativeRunConfig {
             gradient_steps: 1,
             init_ent_coef: 1.0,
             target_entropy: None,
-            human_critic: human_critic_for(method),
+            human_critic: human_critic_for(method, ActorMix::Authors),
         };
         let query_rule = match method {
-            EvaluativeMethod::Dref => QueryRuleConfig {
-                rank_window: DEFAULT_RANK_WINDOW,
-                ceiling: Some(DEFAULT_CEILING),
-                ..QueryRuleConfig::for_declared()
-            },
+            EvaluativeMethod::Dref => QueryRuleConfig::for_declared().products(),
             _ => QueryRuleConfig::for_declared(),
         };
         Self {

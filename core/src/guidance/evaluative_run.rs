@@ -15,8 +15,8 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 pub use super::evaluative_config::{
-    DEFAULT_CEILING, DEFAULT_RANK_WINDOW, EvaluativeRunConfig, FeedbackCeiling, GraphAtEpisodeEnd,
-    QueryRuleConfig, TimeLimitEnd,
+    DEFAULT_CEILING, EvaluativeRunConfig, FeedbackCeiling, GraphAtEpisodeEnd, QueryRuleConfig,
+    TimeLimitEnd,
 };
 
 use super::ask_pacing::AskPacing;
