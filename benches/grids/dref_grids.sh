@@ -1,4 +1,7 @@
 #!/usr/bin/env bash
+# SUPERSEDED (2026-11-27): the grids now run from benches/grids/local-next.jobs and local-long.jobs
+# (benches/grids/local_runs.sh); `dref` became the wake with an opening, so this script's `dref`
+# rows would run that rule, not the recent rank its folders name. Kept as the record of what ran.
 # The grids of the two DREF issues, in the order they are wanted, resumable: each `reproduce`
 # skips finished runs and a stopped `train` resumes from its checkpoint. Two lanes, one run each
 # at a time on one thread; run from a copy of the release binary outside target/:
