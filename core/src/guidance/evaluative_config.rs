@@ -226,14 +226,14 @@ fn human_critic_for(method: EvaluativeMethod, products_mix: ActorMix) -> Option<
 }
 
 /// How the product DREF's actor reads the masked human critic on `task`: a per-task constant,
-/// as the paper's c, k and network sizes are (docs/dref.md, "One rule, a mix per task"). Where
+/// as the paper's c, k and network sizes are (docs/dref.md, "The rule", change 4). Where
 /// the environment's reward leads the learner without a person (SAC alone learns Reaching;
 /// Lunar Lander's shaping rewards every step), H's extrapolation to steps nobody answered costs
 /// reward, so the actor reads H only where a person answered. Where it does not (Placing, which
 /// SAC alone never learns), that extrapolation is what carries the learner to the hoop, so the
 /// actor reads H everywhere, as the authors' code does. A declared task gets the authors' mix
 /// with Placing's c and k.
-pub fn products_mix(task: Task) -> ActorMix {
+fn products_mix(task: Task) -> ActorMix {
     match task {
         Task::Reaching | Task::LunarLander => ActorMix::Answered,
         Task::Placing => ActorMix::Authors,
@@ -243,7 +243,8 @@ pub fn products_mix(task: Task) -> ActorMix {
 impl EvaluativeRunConfig {
     /// The published defaults for `task` and `method`: plain SAC has no human critic, EF and
     /// DREF have one with the authors' actor mix; the product's `dref` regresses it on answered
-    /// steps only and asks by its own rule (`docs/dref.md`).
+    /// steps only, has the actor read it by the task's mix and asks by its own rule
+    /// (`docs/dref.md`).
     pub fn new(task: Task, method: EvaluativeMethod, seed: u64) -> Self {
         let mut sac = SacConfig::for_task(task);
         sac.human_critic = human_critic_for(method, products_mix(task));
