@@ -255,3 +255,26 @@ fn write_fixtures() {
     std::fs::write(format!("{dir}/offered_defaults.txt"), offered_lines()).unwrap();
     std::fs::write(format!("{dir}/errors.txt"), error_lines()).unwrap();
 }
+
+/// Figure 3's `dref` rows must be runs of the rule `dref` ships: every committed seed's
+/// `config.json` is what `train --method dref --seed S` writes today. A change to the default
+/// that leaves them behind fails here until the rows are re-run (docs/dref.md).
+#[test]
+fn figure_3s_dref_rows_are_runs_of_todays_default() {
+    let results = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/results/fig3");
+    for task in [Task::Reaching, Task::Placing] {
+        for seed in 0..10 {
+            let path = results.join(format!("{}/dref/seed{seed}/config.json", task.id()));
+            let committed = std::fs::read_to_string(&path).unwrap();
+            let today = Settings::default()
+                .evaluative(task, EvaluativeMethod::Dref, seed)
+                .unwrap();
+            // Byte for byte, as `train` writes it.
+            same(
+                &serde_json::to_string_pretty(&today).unwrap(),
+                &committed,
+                &path.display().to_string(),
+            );
+        }
+    }
+}
