@@ -286,4 +286,6 @@ impl utoipa::ToSchema for Settings {
 #[cfg(test)]
 mod pinned;
 #[cfg(test)]
+mod product_dref_tests;
+#[cfg(test)]
 mod tests;
