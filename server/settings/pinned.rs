@@ -28,6 +28,11 @@ fn evaluative_cases(task: Task) -> Vec<(&'static str, serde_json::Value)> {
             json!({"max_feedback_rate": 0.1, "min_feedback_rate": 0.02, "feedback_burst": 5}),
         ),
         ("no_ceiling", json!({"max_feedback_rate": 0})),
+        (
+            "opening_accounting",
+            json!({"max_feedback_rate": 0.1, "feedback_opening": 2000,
+                   "feedback_start_empty": true, "opening_repay_share": 0.9}),
+        ),
         ("wake_after", json!({"wake_after": 2000, "rank_window": 0})),
         ("as_run", json!({"profile": "as-run"})),
         (

@@ -36,6 +36,16 @@ pub struct QueryRuleSection {
     /// 2000 for `dref`, 0 otherwise].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub feedback_opening: Option<u64>,
+    /// With a ceiling: start the run with an empty bucket, so that once any opening is repaid
+    /// the run has asked at most `max_feedback_rate` of its steps (a full bucket: up to
+    /// `feedback_burst` more) [default false].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub feedback_start_empty: Option<bool>,
+    /// With an opening: the share of each step's earnings, in (0, 1], that repays the queries
+    /// it borrowed; the rest may be asked while it repays (for the best-ranked state only), so
+    /// the rule is never silent for the whole repayment; 1: all, silent until repaid [default 1].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub opening_repay_share: Option<f64>,
     /// With a ceiling: let the rate run from this floor (recent answers all "good") up to
     /// `max_feedback_rate` (all "bad"); 0: a fixed rate [default 0].
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -58,6 +68,8 @@ impl QueryRuleSection {
             max_feedback_rate: Some(rule.ceiling.map_or(0.0, |x| x.rate)),
             feedback_burst: Some(rule.ceiling.map_or(DEFAULT_CEILING.burst, |x| x.burst)),
             feedback_opening: Some(rule.ceiling.map_or(0, |x| x.opening)),
+            feedback_start_empty: Some(rule.ceiling.is_some_and(|x| x.start_empty)),
+            opening_repay_share: Some(rule.ceiling.map_or(1.0, |x| x.repay_share)),
             min_feedback_rate: Some(rule.ceiling.and_then(|x| x.floor).unwrap_or(0.0)),
             wake_after: Some(rule.wake_after),
         }
@@ -155,6 +167,36 @@ impl QueryRuleSection {
                 }
             }
         }
+        if let Some(empty) = self.feedback_start_empty {
+            match &mut rule.ceiling {
+                Some(c) => c.start_empty = empty,
+                None if !empty => {}
+                None => {
+                    return Err(SettingsError::bad(
+                        "feedback_start_empty",
+                        "the rule has no ceiling; set max_feedback_rate too",
+                    ));
+                }
+            }
+        }
+        if let Some(share) = self.opening_repay_share {
+            if !(share.is_finite() && share > 0.0 && share <= 1.0) {
+                return Err(SettingsError::bad(
+                    "opening_repay_share",
+                    format!("expected a share of the earnings in (0, 1], got {share}"),
+                ));
+            }
+            match &mut rule.ceiling {
+                Some(c) => c.repay_share = share,
+                None if share == 1.0 => {}
+                None => {
+                    return Err(SettingsError::bad(
+                        "opening_repay_share",
+                        "the rule has no ceiling; set max_feedback_rate too",
+                    ));
+                }
+            }
+        }
         Ok(())
     }
 }
@@ -204,5 +246,64 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(not_a_number.contains("feedback_opening"), "{not_a_number}");
+    }
+
+    #[test]
+    fn the_openings_accounting_is_two_settings_of_the_ceiling_off_by_default() {
+        let rule = |pairs: &[(&str, &str)], method| {
+            Settings::from_pairs(pairs.iter().copied())
+                .and_then(|s| s.evaluative(Task::Reaching, method, 0))
+                .map(|c| c.query_rule.ceiling)
+                .map_err(|e| e.to_string())
+        };
+        let plain = rule(&[], EvaluativeMethod::Dref).unwrap().unwrap();
+        assert_eq!((plain.start_empty, plain.repay_share), (false, 1.0));
+        let set = rule(
+            &[
+                ("feedback_start_empty", "true"),
+                ("opening_repay_share", "0.9"),
+            ],
+            EvaluativeMethod::Dref,
+        )
+        .unwrap()
+        .unwrap();
+        assert_eq!((set.start_empty, set.repay_share), (true, 0.9));
+        assert_eq!((set.rate, set.burst, set.opening), (0.1, 20, 2000));
+        // Out of range, or with no ceiling to hold them: refused by name.
+        for (pairs, name, words) in [
+            (
+                vec![("opening_repay_share", "0")],
+                "opening_repay_share",
+                "(0, 1]",
+            ),
+            (
+                vec![("opening_repay_share", "1.5")],
+                "opening_repay_share",
+                "(0, 1]",
+            ),
+            (
+                vec![("feedback_start_empty", "yes")],
+                "feedback_start_empty",
+                "",
+            ),
+        ] {
+            let e = rule(&pairs, EvaluativeMethod::Dref).unwrap_err();
+            assert!(e.contains(name) && e.contains(words), "{e}");
+        }
+        for name in ["feedback_start_empty", "opening_repay_share"] {
+            let value = if name == "feedback_start_empty" {
+                "true"
+            } else {
+                "0.9"
+            };
+            let e = rule(&[(name, value)], EvaluativeMethod::DrefAuthors).unwrap_err();
+            assert!(e.contains(name) && e.contains("no ceiling"), "{e}");
+        }
+        // Their "off" values are accepted on the authors' rule, which has no ceiling.
+        let off = [
+            ("feedback_start_empty", "false"),
+            ("opening_repay_share", "1"),
+        ];
+        assert_eq!(rule(&off, EvaluativeMethod::DrefAuthors), Ok(None));
     }
 }

@@ -5,6 +5,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::ask_budget::AskBudget;
 use super::expert_oracle::OracleConfig;
 use super::feedback_schedule::EvaluativeMethod;
 use super::human_pace::HumanPace;
@@ -47,10 +48,47 @@ pub struct FeedbackCeiling {
     /// repays what it borrowed afterwards (0: off; configs written before it read as 0).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub opening: u64,
+    /// The bucket starts empty, so a run stays within `rate` of its steps once its opening is
+    /// repaid (full, the default: `burst` more). Configs written before it read as full.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub start_empty: bool,
+    /// The share of each step's earnings that repays the opening; the rest may be asked while
+    /// it repays (1, the default: all, silent until repaid; configs before it read as 1).
+    #[serde(default = "whole", skip_serializing_if = "is_whole")]
+    pub repay_share: f64,
 }
 
 fn is_zero(n: &u64) -> bool {
     *n == 0
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
+}
+
+fn whole() -> f64 {
+    1.0
+}
+
+fn is_whole(x: &f64) -> bool {
+    *x == 1.0
+}
+
+impl FeedbackCeiling {
+    /// The bucket that holds the rule to this ceiling.
+    pub fn budget(&self) -> AskBudget {
+        let mut budget = AskBudget::new(self.rate, self.burst).opening_for(self.opening);
+        if self.start_empty {
+            budget = budget.starting_empty();
+        }
+        if self.repay_share < 1.0 {
+            budget = budget.repaying(self.repay_share);
+        }
+        match self.floor {
+            Some(floor) => budget.following_answers(floor),
+            None => budget,
+        }
+    }
 }
 
 /// A ceiling on the rate, the product DREF's and the one `max_feedback_rate` sets on any rule:
@@ -63,6 +101,8 @@ pub const DEFAULT_CEILING: FeedbackCeiling = FeedbackCeiling {
     burst: 20,
     floor: None,
     opening: 0,
+    start_empty: false,
+    repay_share: 1.0,
 };
 /// The product DREF's silence wake: after 1,000 steps without a query the rule ranks the current
 /// state among the states of that silence, so it cannot freeze, and otherwise ranks as the
@@ -121,7 +161,7 @@ impl QueryRuleConfig {
             rule = rule.ranked_among_recent(self.rank_window);
         }
         if let Some(ceiling) = self.ceiling {
-            rule = rule.with_ceiling(ceiling.rate, ceiling.burst, ceiling.floor, ceiling.opening);
+            rule = rule.with_ceiling(ceiling.budget());
         }
         if self.wake_after > 0 {
             rule = rule.waking_after(self.wake_after);

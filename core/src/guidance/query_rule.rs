@@ -128,16 +128,10 @@ impl QueryRule {
         self
     }
 
-    /// Ask on at most `rate` of the steps, at most about `burst` in a row; with `floor`, at a
-    /// rate between it and `rate` by the share of recent "bad" answers; for the first `opening`
-    /// steps as without the ceiling, repaying later what they borrowed
-    /// ([`AskBudget::opening_for`]; 0: no opening).
-    pub fn with_ceiling(mut self, rate: f64, burst: u32, floor: Option<f64>, opening: u64) -> Self {
-        let budget = AskBudget::new(rate, burst).opening_for(opening);
-        self.budget = Some(match floor {
-            Some(floor) => budget.following_answers(floor),
-            None => budget,
-        });
+    /// Ask only while `budget` holds a query: at most its rate of the steps, at most about its
+    /// burst in a row ([`AskBudget`]: its floor, opening and repayment).
+    pub fn with_ceiling(mut self, budget: AskBudget) -> Self {
+        self.budget = Some(budget);
         self
     }
 

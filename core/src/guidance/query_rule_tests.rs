@@ -245,7 +245,7 @@ fn a_ceiling_bounds_the_flood_of_the_first_states() {
     let mut authors = QueryRule::new(0.1, 2, UcbForm::Authors);
     let mut capped = QueryRule::new(0.1, 2, UcbForm::Authors)
         .ranked_among_recent(1_000)
-        .with_ceiling(0.05, 20, None, 0);
+        .with_ceiling(AskBudget::new(0.05, 20));
     let run = |rule: &mut QueryRule| {
         let (mut asked, mut streak, mut longest) = (0u32, 0u32, 0u32);
         for step in 0..20_000u32 {
@@ -271,7 +271,7 @@ fn a_ceiling_bounds_the_flood_of_the_first_states() {
 fn a_rule_with_window_and_ceiling_survives_a_serde_round_trip() {
     let mut rule = QueryRule::new(0.2, 4, UcbForm::Authors)
         .ranked_among_recent(50)
-        .with_ceiling(0.05, 20, None, 0)
+        .with_ceiling(AskBudget::new(0.05, 20))
         .waking_after(7);
     for g in 0..30 {
         if rule.visit(AbstractState(g % 7)) {
