@@ -59,9 +59,9 @@ pub struct QueryRule {
     /// the authors'; checkpoints written before it existed read as `None`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     recent: Option<RecentVisits>,
-    /// A ceiling on the rate of queries (`None`: the authors', no ceiling).
+    /// A ceiling on the rate of queries (`None`: the authors', no ceiling); boxed, as the wake.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    budget: Option<AskBudget>,
+    budget: Option<Box<AskBudget>>,
     /// Rank among the states of a long silence once it has lasted (`None`: never, the authors').
     /// Boxed: most rules have none, and the schedule that holds a rule stays small.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -131,7 +131,7 @@ impl QueryRule {
     /// Ask only while `budget` holds a query: at most its rate of the steps, at most about its
     /// burst in a row ([`AskBudget`]: its floor, opening and repayment).
     pub fn with_ceiling(mut self, budget: AskBudget) -> Self {
-        self.budget = Some(budget);
+        self.budget = Some(Box::new(budget));
         self
     }
 
