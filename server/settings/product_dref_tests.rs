@@ -2,6 +2,7 @@
 //! (docs/dref.md, "The rule"), and the recent rank, the default before, a few settings away.
 
 use super::*;
+use crate::guidance::evaluative_run::{DEFAULT_CEILING, FeedbackCeiling};
 use crate::rl::ActorMix;
 
 #[test]
@@ -26,16 +27,21 @@ fn the_products_dref_and_the_authors_differ_only_in_their_switches() {
             ActorMix::Authors
         );
         // The authors' ranking (no window), woken after 1,000 silent steps, under a 10 %
-        // ceiling that opens with 2,000 steps of the authors' asking.
+        // ceiling that opens with 2,000 steps of the authors' asking, starts empty and repays
+        // the opening from 90 % of its earnings.
         assert_eq!(
             (dref.query_rule.rank_window, dref.query_rule.wake_after),
             (0, 1000)
         );
         assert_eq!(
-            dref.query_rule
-                .ceiling
-                .map(|c| (c.rate, c.burst, c.opening)),
-            Some((0.1, 20, 2000))
+            dref.query_rule.ceiling.map(|c| (
+                c.rate,
+                c.burst,
+                c.opening,
+                c.start_empty,
+                c.repay_share
+            )),
+            Some((0.1, 20, 2000, true, 0.9))
         );
         assert_eq!(
             (authors.query_rule.ceiling, authors.query_rule.wake_after),
@@ -60,12 +66,13 @@ fn the_products_dref_and_the_authors_differ_only_in_their_switches() {
             authors
         );
     }
-    // The recent rank, the product's rule before the wake with an opening, is three settings
-    // away.
+    // The recent rank, the product's rule before the wake with an opening, is four settings
+    // away (and the mix on Reaching and Lunar Lander).
     let recent = Settings::from_pairs([
         ("rank_window", "1000"),
         ("wake_after", "0"),
         ("feedback_opening", "0"),
+        ("feedback_start_empty", "false"),
     ])
     .unwrap()
     .evaluative(Task::Placing, EvaluativeMethod::Dref, 0)
@@ -75,8 +82,26 @@ fn the_products_dref_and_the_authors_differ_only_in_their_switches() {
         (1000, 0)
     );
     assert_eq!(
-        recent.query_rule.ceiling.map(|c| (c.rate, c.opening)),
-        Some((0.1, 0))
+        recent
+            .query_rule
+            .ceiling
+            .map(|c| (c.rate, c.opening, c.start_empty)),
+        Some((0.1, 0, false))
+    );
+    // The opening wake as it shipped before its accounting changed (12th session) is two.
+    let before = Settings::from_pairs([
+        ("feedback_start_empty", "false"),
+        ("opening_repay_share", "1"),
+    ])
+    .unwrap()
+    .evaluative(Task::Placing, EvaluativeMethod::Dref, 0)
+    .unwrap();
+    assert_eq!(
+        before.query_rule.ceiling,
+        Some(FeedbackCeiling {
+            opening: 2000,
+            ..DEFAULT_CEILING
+        })
     );
     let bad = Settings::from_pairs([("max_feedback_rate", "1.5")])
         .unwrap()

@@ -249,26 +249,43 @@ mod tests {
     }
 
     #[test]
-    fn the_openings_accounting_is_two_settings_of_the_ceiling_off_by_default() {
+    fn the_openings_accounting_is_two_settings_of_the_ceiling_on_for_dref_only() {
         let rule = |pairs: &[(&str, &str)], method| {
             Settings::from_pairs(pairs.iter().copied())
                 .and_then(|s| s.evaluative(Task::Reaching, method, 0))
                 .map(|c| c.query_rule.ceiling)
                 .map_err(|e| e.to_string())
         };
-        let plain = rule(&[], EvaluativeMethod::Dref).unwrap().unwrap();
-        assert_eq!((plain.start_empty, plain.repay_share), (false, 1.0));
-        let set = rule(
+        let product = rule(&[], EvaluativeMethod::Dref).unwrap().unwrap();
+        assert_eq!((product.start_empty, product.repay_share), (true, 0.9));
+        let off = rule(
             &[
-                ("feedback_start_empty", "true"),
-                ("opening_repay_share", "0.9"),
+                ("feedback_start_empty", "false"),
+                ("opening_repay_share", "1"),
             ],
             EvaluativeMethod::Dref,
         )
         .unwrap()
         .unwrap();
-        assert_eq!((set.start_empty, set.repay_share), (true, 0.9));
-        assert_eq!((set.rate, set.burst, set.opening), (0.1, 20, 2000));
+        assert_eq!((off.start_empty, off.repay_share), (false, 1.0));
+        assert_eq!((off.rate, off.burst, off.opening), (0.1, 20, 2000));
+        // A ceiling set on the authors' rule has neither unless asked.
+        let capped = rule(
+            &[("max_feedback_rate", "0.1")],
+            EvaluativeMethod::DrefAuthors,
+        );
+        let capped = capped.unwrap().unwrap();
+        assert_eq!((capped.start_empty, capped.repay_share), (false, 1.0));
+        let set = rule(
+            &[
+                ("max_feedback_rate", "0.1"),
+                ("feedback_start_empty", "true"),
+                ("opening_repay_share", "0.5"),
+            ],
+            EvaluativeMethod::DrefAuthors,
+        );
+        let set = set.unwrap().unwrap();
+        assert_eq!((set.start_empty, set.repay_share), (true, 0.5));
         // Out of range, or with no ceiling to hold them: refused by name.
         for (pairs, name, words) in [
             (

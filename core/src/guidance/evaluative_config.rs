@@ -110,9 +110,13 @@ pub const DEFAULT_CEILING: FeedbackCeiling = FeedbackCeiling {
 pub const DEFAULT_WAKE_AFTER: u64 = 1_000;
 /// The product DREF's opening: the run's first 2,000 steps ask as the authors' rule would (its
 /// first answers are what teach Placing's learner the way), and what they borrow from the
-/// ceiling is repaid before the rule asks again, so a run stays under 10 % + the burst and no
-/// flood passes the 2k grace (docs/dref.md).
+/// ceiling is repaid from later earnings, so no flood passes the 2k grace (docs/dref.md).
+/// The bucket starts empty, so a run that has repaid has asked at most 10 % of its steps.
 pub const DEFAULT_OPENING: u64 = 2_000;
+/// The share of each step's earnings that repays the product's opening: the rest stays askable,
+/// so the rule is not silent for the whole repayment (12k-18k steps on Placing, where a silence
+/// of a failing learner is a freeze; docs/dref.md).
+pub const DEFAULT_REPAY_SHARE: f64 = 0.9;
 
 impl QueryRuleConfig {
     /// The authors' rule on `task` (algorithms.md section 2).
@@ -141,12 +145,15 @@ impl QueryRuleConfig {
     }
 
     /// The product's rule on these constants (docs/dref.md): the authors' ranking, woken after a
-    /// silence, under a 10 % ceiling that opens with the authors' asking.
+    /// silence, under a 10 % ceiling that opens with the authors' asking and repays it from 90 %
+    /// of its earnings.
     fn products(self) -> Self {
         Self {
             rank_window: 0,
             ceiling: Some(FeedbackCeiling {
                 opening: DEFAULT_OPENING,
+                start_empty: true,
+                repay_share: DEFAULT_REPAY_SHARE,
                 ..DEFAULT_CEILING
             }),
             wake_after: DEFAULT_WAKE_AFTER,
