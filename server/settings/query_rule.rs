@@ -145,39 +145,19 @@ impl QueryRuleSection {
             if b == 0 {
                 return Err(SettingsError::bad("feedback_burst", "expected at least 1"));
             }
-            match &mut rule.ceiling {
-                Some(c) => c.burst = b,
-                None => {
-                    return Err(SettingsError::bad(
-                        "feedback_burst",
-                        "the rule has no ceiling; set max_feedback_rate too",
-                    ));
-                }
+            if let Some(c) = the_ceiling(rule, "feedback_burst", false)? {
+                c.burst = b;
             }
         }
-        if let Some(steps) = self.feedback_opening {
-            match &mut rule.ceiling {
-                Some(c) => c.opening = steps,
-                None if steps == 0 => {}
-                None => {
-                    return Err(SettingsError::bad(
-                        "feedback_opening",
-                        "the rule has no ceiling; set max_feedback_rate too",
-                    ));
-                }
-            }
+        if let Some(steps) = self.feedback_opening
+            && let Some(c) = the_ceiling(rule, "feedback_opening", steps == 0)?
+        {
+            c.opening = steps;
         }
-        if let Some(empty) = self.feedback_start_empty {
-            match &mut rule.ceiling {
-                Some(c) => c.start_empty = empty,
-                None if !empty => {}
-                None => {
-                    return Err(SettingsError::bad(
-                        "feedback_start_empty",
-                        "the rule has no ceiling; set max_feedback_rate too",
-                    ));
-                }
-            }
+        if let Some(empty) = self.feedback_start_empty
+            && let Some(c) = the_ceiling(rule, "feedback_start_empty", !empty)?
+        {
+            c.start_empty = empty;
         }
         if let Some(share) = self.opening_repay_share {
             if !(share.is_finite() && share > 0.0 && share <= 1.0) {
@@ -186,18 +166,28 @@ impl QueryRuleSection {
                     format!("expected a share of the earnings in (0, 1], got {share}"),
                 ));
             }
-            match &mut rule.ceiling {
-                Some(c) => c.repay_share = share,
-                None if share == 1.0 => {}
-                None => {
-                    return Err(SettingsError::bad(
-                        "opening_repay_share",
-                        "the rule has no ceiling; set max_feedback_rate too",
-                    ));
-                }
+            if let Some(c) = the_ceiling(rule, "opening_repay_share", share == 1.0)? {
+                c.repay_share = share;
             }
         }
         Ok(())
+    }
+}
+
+/// The rule's ceiling, for a setting of it named `key`: `None` when the rule has none and the
+/// value is the setting's "off" (nothing to set), refused by name when it has none otherwise.
+fn the_ceiling<'a>(
+    rule: &'a mut QueryRuleConfig,
+    key: &'static str,
+    off: bool,
+) -> Result<Option<&'a mut FeedbackCeiling>, SettingsError> {
+    match &mut rule.ceiling {
+        Some(c) => Ok(Some(c)),
+        None if off => Ok(None),
+        None => Err(SettingsError::bad(
+            key,
+            "the rule has no ceiling; set max_feedback_rate too",
+        )),
     }
 }
 

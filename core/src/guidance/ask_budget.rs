@@ -63,15 +63,15 @@ pub struct AskBudget {
     spare: f64,
 }
 
-fn is_zero(n: &u64) -> bool {
+pub(super) fn is_zero(n: &u64) -> bool {
     *n == 0
 }
 
-fn whole() -> f64 {
+pub(super) fn whole() -> f64 {
     1.0
 }
 
-fn is_whole(x: &f64) -> bool {
+pub(super) fn is_whole(x: &f64) -> bool {
     *x == 1.0
 }
 
@@ -79,7 +79,7 @@ fn is_nothing(x: &f64) -> bool {
     *x == 0.0
 }
 
-fn is_false(b: &bool) -> bool {
+pub(super) fn is_false(b: &bool) -> bool {
     !*b
 }
 

@@ -5,7 +5,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::ask_budget::AskBudget;
+// The ceiling's fields serialise as the bucket's own do.
+use super::ask_budget::{AskBudget, is_false, is_whole, is_zero, whole};
 use super::expert_oracle::OracleConfig;
 use super::feedback_schedule::EvaluativeMethod;
 use super::human_pace::HumanPace;
@@ -58,31 +59,14 @@ pub struct FeedbackCeiling {
     pub repay_share: f64,
 }
 
-fn is_zero(n: &u64) -> bool {
-    *n == 0
-}
-
-fn is_false(b: &bool) -> bool {
-    !*b
-}
-
-fn whole() -> f64 {
-    1.0
-}
-
-fn is_whole(x: &f64) -> bool {
-    *x == 1.0
-}
-
 impl FeedbackCeiling {
     /// The bucket that holds the rule to this ceiling.
     pub fn budget(&self) -> AskBudget {
-        let mut budget = AskBudget::new(self.rate, self.burst).opening_for(self.opening);
+        let mut budget = AskBudget::new(self.rate, self.burst)
+            .opening_for(self.opening)
+            .repaying(self.repay_share);
         if self.start_empty {
             budget = budget.starting_empty();
-        }
-        if self.repay_share < 1.0 {
-            budget = budget.repaying(self.repay_share);
         }
         match self.floor {
             Some(floor) => budget.following_answers(floor),
