@@ -1,5 +1,5 @@
-//! The answered mix's gates on the run's own outcomes (`docs/dref.md`): how much of H's weight
-//! the actor keeps on sampled rows nobody answered, set before every update.
+//! The answered mix's gates on the run's own outcomes (`docs/dref-history.md`): how much of
+//! H's weight the actor keeps on sampled rows nobody answered, set before every update.
 //!
 //! - `mix_answered_after = N`: full weight (the authors' mix) until the run's N-th successful
 //!   episode, the configured `unanswered` share after it, for good.
