@@ -9,7 +9,8 @@ A folder holds `seed<N>/` runs (summary.json, metrics.csv). Each run's line: cum
 feedback %, longest flood after 2k steps, successes in its last 10 episodes (on Lunar Lander with
 their mean return), wall seconds and kernels; a run learns as the report says (8 or more of its
 last 10 succeed; on Lunar Lander their mean return is 200 or more). The test counts ties as one
-half and enumerates every split of the pooled ranks, so its p is exact for the seeds given (no normal approximation).
+half and enumerates every split of the pooled ranks, so its p is exact for the seeds given (no
+normal approximation).
 """
 
 from __future__ import annotations
