@@ -15,7 +15,10 @@ from __future__ import annotations
 
 import argparse
 import csv
+import json
 from pathlib import Path
+
+from rows import episodes_learnt
 
 
 def episodes(run: Path) -> list[dict[str, str]]:
@@ -23,18 +26,10 @@ def episodes(run: Path) -> list[dict[str, str]]:
         return list(csv.DictReader(f))
 
 
-def learnt(window: list[dict[str, str]], lunar_lander: bool) -> bool:
-    if len(window) < 10:
-        return False
-    if lunar_lander:
-        return sum(float(e["return"]) for e in window) / len(window) >= 200.0
-    return sum(e["outcome"] == "success" for e in window) >= 8
-
-
 def first_learnt(rows: list[dict[str, str]], lunar_lander: bool) -> int | None:
     """The end step of the first episode after which the last 10 pass the report's rule."""
     for i in range(9, len(rows)):
-        if learnt(rows[i - 9 : i + 1], lunar_lander):
+        if episodes_learnt(rows[i - 9 : i + 1], lunar_lander):
             return int(rows[i]["step"])
     return None
 
@@ -66,7 +61,7 @@ def main() -> None:
         rows = episodes(run)
         if not rows:
             continue
-        lunar_lander = "lunar-lander" in (run / "config.json").read_text()
+        lunar_lander = json.loads((run / "config.json").read_text())["task"] == "lunar-lander"
         bins = binned(rows, args.bin)
         returns = " ".join("   -  " if m is None else f"{m:6.0f}" for m, _ in bins)
         asked = " ".join(f"{a:6d}" for _, a in bins)
