@@ -54,6 +54,7 @@ fn settings_override_every_sac_key() {
             agree_within: 0.0,
             failure_window: 0,
             unread_to_q: false,
+            answer_replay: false,
         })
     );
     let answered = sac_with(&[
@@ -77,6 +78,20 @@ fn settings_override_every_sac_key() {
         ),
         (ActorMix::Answered, 0.3, 10, 0.2, 10, true)
     );
+    let replayed = sac_with(&[
+        ("human_critic_mask", "true"),
+        ("human_critic_answer_replay", "true"),
+    ])
+    .unwrap();
+    assert!(replayed.human_critic.unwrap().answer_replay);
+    let anchored = sac_with(&[
+        ("human_critic_mask", "true"),
+        ("human_critic_anchor", "0.5"),
+        ("human_critic_answer_replay", "true"),
+    ])
+    .unwrap_err();
+    assert_eq!(anchored.key(), Some("human_critic_answer_replay"));
+    assert!(anchored.to_string().contains("human_critic_anchor = 0"));
     let c = sac_with(&[("target_entropy", "-3"), ("target_entropy", "auto")]).unwrap();
     assert_eq!(c.target_entropy, None);
     assert_eq!(
@@ -117,6 +132,12 @@ fn settings_reject_unknown_keys_and_bad_values_clearly() {
         ("mix_failure_window", "-1", "invalid"),
         ("mix_unread_to_q", "true", "mix = \"answered\""),
         ("mix_unread_to_q", "1", "invalid type"),
+        (
+            "human_critic_answer_replay",
+            "true",
+            "human_critic_mask = true",
+        ),
+        ("human_critic_answer_replay", "on", "invalid type"),
     ] {
         let err = sac_with(&[(k, v)]).expect_err(&format!("{k}={v} accepted"));
         assert_eq!(err.key(), Some(k), "{k}={v}: {err:?} should name its key");

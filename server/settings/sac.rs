@@ -79,6 +79,11 @@ pub struct HumanCriticSection {
     /// the plain mask).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub human_critic_anchor: Option<f32>,
+    /// With `human_critic_mask`: the human critic regresses a batch of its own drawn from the
+    /// answered transitions, not the answered rows of SAC's batch (a few at a few percent of
+    /// feedback).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub human_critic_answer_replay: Option<bool>,
     /// With `mix = "answered"`: the share of H's weight the actor keeps on transitions nobody
     /// answered (0: none, 1: the authors' mix).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -190,6 +195,7 @@ impl HumanCriticSection {
             mix: Some(critic.mix),
             human_critic_mask: Some(critic.mask),
             human_critic_anchor: Some(critic.anchor),
+            human_critic_answer_replay: Some(critic.answer_replay),
             mix_unanswered: Some(critic.unanswered),
             mix_answered_after: Some(critic.answered_after),
             mix_agree_within: Some(critic.agree_within),
@@ -233,6 +239,22 @@ impl HumanCriticSection {
                 ));
             }
             critic(sac).anchor = a;
+        }
+        if let Some(on) = self.human_critic_answer_replay {
+            if on && !critic(sac).mask {
+                return Err(SettingsError::bad(
+                    "human_critic_answer_replay",
+                    "replays the masked human critic's answers: set human_critic_mask = true too",
+                ));
+            }
+            if on && critic(sac).anchor > 0.0 {
+                return Err(SettingsError::bad(
+                    "human_critic_answer_replay",
+                    "its batch holds answered transitions only, so nothing is left to anchor: \
+                     set human_critic_anchor = 0",
+                ));
+            }
+            critic(sac).answer_replay = on;
         }
         if let Some(w) = self.mix_unanswered {
             if !(0.0..=1.0).contains(&w) {

@@ -88,6 +88,9 @@ pub struct ReplayBuffer {
     human: Vec<f32>,
     next_obs: Vec<f32>,
     dones: Vec<f32>,
+    /// The slots whose H is not 0, in slot order: what a human critic with a batch of its own
+    /// draws from (`answer_replay`). Derived from `human`, so a checkpoint need not store it.
+    answered: Vec<usize>,
 }
 
 impl ReplayBuffer {
@@ -106,6 +109,7 @@ impl ReplayBuffer {
             human: vec![0.0; capacity],
             next_obs: vec![0.0; capacity * obs_dim],
             dones: vec![0.0; capacity],
+            answered: Vec::new(),
         }
     }
 
@@ -139,7 +143,7 @@ impl ReplayBuffer {
         self.next_obs[i * self.obs_dim..(i + 1) * self.obs_dim].copy_from_slice(t.next_obs);
         self.actions[i * self.act_dim..(i + 1) * self.act_dim].copy_from_slice(t.action);
         self.rewards[i] = t.reward;
-        self.human[i] = t.human;
+        self.set_human_in(i, t.human);
         self.dones[i] = if t.terminated { 1.0 } else { 0.0 };
         self.head = (self.head + 1) % self.capacity;
         self.len = (self.len + 1).min(self.capacity);
@@ -154,7 +158,25 @@ impl ReplayBuffer {
     /// Replace the human feedback stored in `slot`.
     pub fn set_human(&mut self, slot: usize, human: f32) {
         assert!(slot < self.len, "slot {slot} not filled");
+        self.set_human_in(slot, human);
+    }
+
+    /// `human[slot] = human`, keeping `answered` (sorted by slot) in step with it.
+    fn set_human_in(&mut self, slot: usize, human: f32) {
+        let was = self.human[slot] != 0.0;
         self.human[slot] = human;
+        match (was, human != 0.0, self.answered.binary_search(&slot)) {
+            (false, true, Err(at)) => self.answered.insert(at, slot),
+            (true, false, Ok(at)) => {
+                self.answered.remove(at);
+            }
+            _ => {}
+        }
+    }
+
+    /// How many stored transitions have an answer (H != 0).
+    pub fn answered_len(&self) -> usize {
+        self.answered.len()
     }
 
     pub fn human(&self, slot: usize) -> f32 {
@@ -216,6 +238,7 @@ impl ReplayBuffer {
         }
         buffer.len = len;
         buffer.head = head;
+        buffer.answered = (0..len).filter(|&i| buffer.human[i] != 0.0).collect();
         Ok(buffer)
     }
 
@@ -248,18 +271,34 @@ impl ReplayBuffer {
     /// Fill `batch` with transitions drawn uniformly with replacement.
     pub fn sample<R: Rng>(&self, rng: &mut R, batch: &mut Batch) {
         assert!(!self.is_empty(), "sampling an empty replay buffer");
-        let (od, ad) = (self.obs_dim, self.act_dim);
         for b in 0..batch.size {
             let i = rng.random_range(0..self.len);
-            batch.obs[b * od..(b + 1) * od].copy_from_slice(&self.obs[i * od..(i + 1) * od]);
-            batch.next_obs[b * od..(b + 1) * od]
-                .copy_from_slice(&self.next_obs[i * od..(i + 1) * od]);
-            batch.actions[b * ad..(b + 1) * ad]
-                .copy_from_slice(&self.actions[i * ad..(i + 1) * ad]);
-            batch.rewards[b] = self.rewards[i];
-            batch.human[b] = self.human[i];
-            batch.dones[b] = self.dones[i];
+            self.copy_row(i, batch, b);
         }
+    }
+
+    /// Fill `batch` with answered transitions (H != 0), drawn uniformly with replacement among
+    /// them; `false`, with nothing drawn, while none has an answer.
+    pub fn sample_answered<R: Rng>(&self, rng: &mut R, batch: &mut Batch) -> bool {
+        if self.answered.is_empty() {
+            return false;
+        }
+        for b in 0..batch.size {
+            let i = self.answered[rng.random_range(0..self.answered.len())];
+            self.copy_row(i, batch, b);
+        }
+        true
+    }
+
+    /// Slot `i` into row `b` of `batch`.
+    fn copy_row(&self, i: usize, batch: &mut Batch, b: usize) {
+        let (od, ad) = (self.obs_dim, self.act_dim);
+        batch.obs[b * od..(b + 1) * od].copy_from_slice(&self.obs[i * od..(i + 1) * od]);
+        batch.next_obs[b * od..(b + 1) * od].copy_from_slice(&self.next_obs[i * od..(i + 1) * od]);
+        batch.actions[b * ad..(b + 1) * ad].copy_from_slice(&self.actions[i * ad..(i + 1) * ad]);
+        batch.rewards[b] = self.rewards[i];
+        batch.human[b] = self.human[i];
+        batch.dones[b] = self.dones[i];
     }
 }
 
@@ -324,6 +363,55 @@ mod tests {
         let mut batch = Batch::new(4, 2, 1);
         buf.sample(&mut ChaCha8Rng::seed_from_u64(2), &mut batch);
         assert!(batch.human.iter().all(|&h| h == -1.0));
+    }
+
+    /// The answered slots follow every way H changes: a push with an answer, a relabel (an
+    /// undo to 0 and a late answer), an overwrite of the oldest, and a checkpoint's bytes.
+    #[test]
+    fn answered_draws_come_from_answered_slots_only() {
+        let mut buf = ReplayBuffer::new(4, 2, 1);
+        let mut batch = Batch::new(64, 2, 1);
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        push_marked(&mut buf, 0.0, false);
+        assert!(
+            !buf.sample_answered(&mut rng, &mut batch),
+            "nothing answered yet"
+        );
+        let drawn = |buf: &ReplayBuffer, rng: &mut ChaCha8Rng, batch: &mut Batch| {
+            assert!(buf.sample_answered(rng, batch));
+            let mut marks: Vec<f32> = batch.obs.iter().step_by(2).copied().collect();
+            marks.sort_by(f32::total_cmp);
+            marks.dedup();
+            assert!(batch.human.iter().all(|&h| h != 0.0));
+            marks
+        };
+        let answered = |buf: &mut ReplayBuffer, mark: f32, human: f32| {
+            buf.push(Transition {
+                obs: &[mark, mark + 0.5],
+                action: &[-mark],
+                reward: 0.0,
+                human,
+                next_obs: &[mark, mark],
+                terminated: false,
+            })
+        };
+        answered(&mut buf, 1.0, 1.0);
+        let late = push_marked(&mut buf, 2.0, false);
+        answered(&mut buf, 3.0, -1.0);
+        assert_eq!(drawn(&buf, &mut rng, &mut batch), vec![1.0, 3.0]);
+        buf.set_human(late, 1.0);
+        buf.set_human(1, 0.0);
+        assert_eq!(buf.answered_len(), 2);
+        assert_eq!(drawn(&buf, &mut rng, &mut batch), vec![2.0, 3.0]);
+        // Slot 0 (mark 0, silent) is overwritten by an answered 4, then slot 1 by a silent 5.
+        answered(&mut buf, 4.0, 1.0);
+        push_marked(&mut buf, 5.0, false);
+        assert_eq!(drawn(&buf, &mut rng, &mut batch), vec![2.0, 3.0, 4.0]);
+        let (layout, bytes) = buf.to_bytes();
+        let back = ReplayBuffer::from_bytes(&layout, &bytes).unwrap();
+        assert_eq!(back.answered, buf.answered);
+        answered(&mut buf, 6.0, 1.0); // overwrites the answered 2 in slot 2
+        assert_eq!(drawn(&buf, &mut rng, &mut batch), vec![3.0, 4.0, 6.0]);
     }
 
     #[test]

@@ -10,6 +10,10 @@ use crate::rl::{Mlp, MlpWorkspace};
 pub(super) struct StepBuffers {
     /// The sampled minibatch `(s, a, r, H, s', terminated)`.
     pub batch: Batch,
+    /// With `answer_replay`: the human critic's own minibatch, drawn from answered transitions
+    /// (`has_answers`: whether this step drew one, false while nothing is answered).
+    pub answer_batch: Option<Batch>,
+    pub has_answers: bool,
     /// Standard normal noise of the policy sample at s (`a_pi`) and at s' (`next_actions`).
     pub noise_pi: Vec<f32>,
     pub noise_next: Vec<f32>,
@@ -83,11 +87,15 @@ impl StepBuffers {
         actor: &Mlp,
         critic: &Mlp,
         human_critic: bool,
+        answer_replay: bool,
     ) -> Self {
         let per_action = vec![0.0; batch_size * act_dim];
         let per_sample = vec![0.0; batch_size];
         Self {
             batch: Batch::new(batch_size, obs_dim, act_dim),
+            answer_batch: (human_critic && answer_replay)
+                .then(|| Batch::new(batch_size, obs_dim, act_dim)),
+            has_answers: false,
             noise_pi: per_action.clone(),
             noise_next: per_action.clone(),
             a_pi: per_action.clone(),

@@ -86,6 +86,14 @@ pub struct HumanCriticConfig {
     /// while off.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub unread_to_q: bool,
+    /// `human_critic_answer_replay` (our choice, with `mask`): the human critic regresses a
+    /// batch of its own, `batch_size` transitions drawn from the answered ones, instead of
+    /// the answered rows of SAC's batch. At a few percent of feedback SAC's batch of 512 holds
+    /// about ten answered rows, so the masked critic fits its answers on a fiftieth of the
+    /// samples a critic told on every step gets; with its own batch it takes full steps on the
+    /// answers as they are, however rare. false: off. Left out of a run's config while off.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub answer_replay: bool,
 }
 
 fn is_zero(x: &f32) -> bool {
@@ -108,6 +116,7 @@ impl Default for HumanCriticConfig {
             agree_within: 0.0,
             failure_window: 0,
             unread_to_q: false,
+            answer_replay: false,
         }
     }
 }

@@ -138,6 +138,10 @@ impl Sac {
             &actor,
             &q1,
             human_critic.is_some(),
+            config
+                .human_critic
+                .as_ref()
+                .is_some_and(|c| c.answer_replay),
         );
         Self {
             target_entropy: config.target_entropy.unwrap_or(-(act_dim as f32)),
@@ -275,12 +279,17 @@ impl Sac {
         })
     }
 
-    /// Draw the minibatch, then the policy noise at s and at s': all the randomness of a step.
+    /// Draw the minibatch, then the policy noise at s and at s', then (with `answer_replay`)
+    /// the human critic's minibatch of answered transitions: all the randomness of a step.
+    /// Without `answer_replay` the draws are those of the runs before it, to the bit.
     fn sample_batch_and_noise(&mut self, replay: &ReplayBuffer) {
         let b = &mut self.buffers;
         replay.sample(&mut self.rng, &mut b.batch);
         for e in b.noise_pi.iter_mut().chain(b.noise_next.iter_mut()) {
             *e = self.rng.sample(StandardNormal);
+        }
+        if let Some(answers) = &mut b.answer_batch {
+            b.has_answers = replay.sample_answered(&mut self.rng, answers);
         }
     }
 }

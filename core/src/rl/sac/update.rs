@@ -139,14 +139,20 @@ impl Sac {
 
     /// Step 5 (Eq. 3): `0.5 sum_j mse(H_j(s, a), H)` on the immediate feedback, over every row
     /// (H = 0 included, as the authors do) or, with `mask`, over the rows with H != 0 only, plus
-    /// `anchor` times the other rows' mean squared H (their pull towards 0).
-    /// `None` without a human critic, or masked and unanchored with no feedback in the batch.
+    /// `anchor` times the other rows' mean squared H (their pull towards 0); with
+    /// `answer_replay`, over the critic's own batch of answered transitions.
+    /// `None` without a human critic, or masked and unanchored with no feedback in the batch
+    /// (with `answer_replay`: while no transition has an answer).
     pub(super) fn human_critic_loss(&mut self) -> Option<f32> {
         let (hc, [h1_ws, h2_ws]) = match (&mut self.human_critic, &mut self.buffers.h_ws) {
             (Some(hc), Some(ws)) => (hc, ws),
             _ => return None,
         };
-        let batch = &self.buffers.batch;
+        let batch = match &self.buffers.answer_batch {
+            Some(_) if !self.buffers.has_answers => return None,
+            Some(answers) => answers,
+            None => &self.buffers.batch,
+        };
         // Masked: the anchor's weight (0 for the plain mask); unmasked: None.
         let mask = self
             .config

@@ -215,6 +215,7 @@ fn actor_loss_gradient_authors_mix() {
         agree_within: 0.0,
         failure_window: 0,
         unread_to_q: false,
+        answer_replay: false,
     };
     actor_case("actor loss, authors' mix", Some(human));
 }
@@ -231,6 +232,7 @@ fn actor_loss_gradient_paper_mix() {
         agree_within: 0.0,
         failure_window: 0,
         unread_to_q: false,
+        answer_replay: false,
     };
     actor_case("actor loss, paper's mix", Some(human));
 }
@@ -248,6 +250,7 @@ fn actor_loss_gradient_answered_mix() {
             agree_within: 0.0,
             failure_window: 0,
             unread_to_q: false,
+            answer_replay: false,
         };
         actor_case(
             &format!("actor loss, answered mix, unanswered {unanswered}"),
@@ -268,6 +271,7 @@ fn actor_loss_gradient_answered_mix_where_the_heads_agree() {
         agree_within: 0.05,
         failure_window: 0,
         unread_to_q: false,
+        answer_replay: false,
     };
     actor_case("actor loss, answered mix, heads agreeing", Some(human));
 }
@@ -284,6 +288,7 @@ fn actor_loss_gradient_answered_mix_with_h_unread_weight_on_q() {
         agree_within: 0.0,
         failure_window: 0,
         unread_to_q: true,
+        answer_replay: false,
     };
     actor_case("actor loss, answered mix, unread weight on Q", Some(human));
 }
@@ -347,6 +352,7 @@ fn answered_mix_reads_h_on_answered_rows_only() {
             agree_within: 0.0,
             failure_window: 0,
             unread_to_q: false,
+            answer_replay: false,
         };
         let mut sac = tiny(Some(config));
         sac.buffers.batch.human.fill(human);
@@ -402,6 +408,7 @@ fn the_answered_mix_reads_h_where_the_heads_agree() {
             agree_within,
             failure_window: 0,
             unread_to_q: false,
+            answer_replay: false,
         };
         let mut sac = tiny(Some(config));
         sac.buffers.batch.human.fill(0.0);

@@ -1,6 +1,7 @@
 //! Tests that need the learner's insides: a fixed batch and fixed noise injected into its step
 //! buffers, and each loss on its own.
 
+mod answer_replay;
 mod gradients;
 mod target;
 mod threads;

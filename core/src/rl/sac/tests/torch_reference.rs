@@ -173,6 +173,7 @@ fn dref_with_the_authors_mix_agrees_with_pytorch() {
             agree_within: 0.0,
             failure_window: 0,
             unread_to_q: false,
+            answer_replay: false,
         };
         let worst = check(
             Some(human),
@@ -197,6 +198,7 @@ fn dref_with_the_paper_mix_and_mask_agrees_with_pytorch() {
             agree_within: 0.0,
             failure_window: 0,
             unread_to_q: false,
+            answer_replay: false,
         };
         let worst = check(
             Some(human),
