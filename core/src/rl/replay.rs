@@ -278,16 +278,17 @@ impl ReplayBuffer {
     }
 
     /// Fill `batch` with answered transitions (H != 0), drawn uniformly with replacement among
-    /// them; `false`, with nothing drawn, while none has an answer.
-    pub fn sample_answered<R: Rng>(&self, rng: &mut R, batch: &mut Batch) -> bool {
+    /// them. While none has an answer nothing is drawn and the batch's H is all 0: a batch
+    /// without feedback, which the masked critic already skips.
+    pub fn sample_answered<R: Rng>(&self, rng: &mut R, batch: &mut Batch) {
         if self.answered.is_empty() {
-            return false;
+            batch.human.fill(0.0);
+            return;
         }
         for b in 0..batch.size {
             let i = self.answered[rng.random_range(0..self.answered.len())];
             self.copy_row(i, batch, b);
         }
-        true
     }
 
     /// Slot `i` into row `b` of `batch`.
@@ -373,12 +374,14 @@ mod tests {
         let mut batch = Batch::new(64, 2, 1);
         let mut rng = ChaCha8Rng::seed_from_u64(4);
         push_marked(&mut buf, 0.0, false);
+        batch.human.fill(1.0);
+        buf.sample_answered(&mut rng, &mut batch);
         assert!(
-            !buf.sample_answered(&mut rng, &mut batch),
-            "nothing answered yet"
+            batch.human.iter().all(|&h| h == 0.0),
+            "nothing answered yet: a batch without feedback"
         );
         let drawn = |buf: &ReplayBuffer, rng: &mut ChaCha8Rng, batch: &mut Batch| {
-            assert!(buf.sample_answered(rng, batch));
+            buf.sample_answered(rng, batch);
             let mut marks: Vec<f32> = batch.obs.iter().step_by(2).copied().collect();
             marks.sort_by(f32::total_cmp);
             marks.dedup();

@@ -11,9 +11,8 @@ pub(super) struct StepBuffers {
     /// The sampled minibatch `(s, a, r, H, s', terminated)`.
     pub batch: Batch,
     /// With `answer_replay`: the human critic's own minibatch, drawn from answered transitions
-    /// (`has_answers`: whether this step drew one, false while nothing is answered).
+    /// (H all 0 while nothing is answered).
     pub answer_batch: Option<Batch>,
-    pub has_answers: bool,
     /// Standard normal noise of the policy sample at s (`a_pi`) and at s' (`next_actions`).
     pub noise_pi: Vec<f32>,
     pub noise_next: Vec<f32>,
@@ -95,7 +94,6 @@ impl StepBuffers {
             batch: Batch::new(batch_size, obs_dim, act_dim),
             answer_batch: (human_critic && answer_replay)
                 .then(|| Batch::new(batch_size, obs_dim, act_dim)),
-            has_answers: false,
             noise_pi: per_action.clone(),
             noise_next: per_action.clone(),
             a_pi: per_action.clone(),

@@ -289,7 +289,7 @@ impl Sac {
             *e = self.rng.sample(StandardNormal);
         }
         if let Some(answers) = &mut b.answer_batch {
-            b.has_answers = replay.sample_answered(&mut self.rng, answers);
+            replay.sample_answered(&mut self.rng, answers);
         }
     }
 }

@@ -142,17 +142,17 @@ impl Sac {
     /// `anchor` times the other rows' mean squared H (their pull towards 0); with
     /// `answer_replay`, over the critic's own batch of answered transitions.
     /// `None` without a human critic, or masked and unanchored with no feedback in the batch
-    /// (with `answer_replay`: while no transition has an answer).
+    /// (with `answer_replay`, which needs the plain mask: while no transition has an answer).
     pub(super) fn human_critic_loss(&mut self) -> Option<f32> {
         let (hc, [h1_ws, h2_ws]) = match (&mut self.human_critic, &mut self.buffers.h_ws) {
             (Some(hc), Some(ws)) => (hc, ws),
             _ => return None,
         };
-        let batch = match &self.buffers.answer_batch {
-            Some(_) if !self.buffers.has_answers => return None,
-            Some(answers) => answers,
-            None => &self.buffers.batch,
-        };
+        let batch = self
+            .buffers
+            .answer_batch
+            .as_ref()
+            .unwrap_or(&self.buffers.batch);
         // Masked: the anchor's weight (0 for the plain mask); unmasked: None.
         let mask = self
             .config
