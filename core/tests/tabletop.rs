@@ -5,8 +5,8 @@ use dualrep_core::sim::placing::{self, Placing};
 use dualrep_core::sim::reaching::{self, Reaching};
 use dualrep_core::sim::rollout::{SimplePolicy, run_episodes, run_episodes_with};
 use dualrep_core::sim::{
-    Env, EnvOptions, Geometry, GripObservation, Outcome, PlacingSuccess, RenderState, Start, Step,
-    Task, Variant,
+    Env, EnvOptions, Geometry, GripObservation, HoopShape, Outcome, PlacingSuccess, RenderState,
+    Start, Step, Task, Variant,
 };
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -253,6 +253,67 @@ fn gripper_touching_the_top_from_beyond_the_no_entry_box_fails() {
         }
     }
     assert_eq!(outcome, Some(Outcome::Failure));
+}
+
+/// The authors' ring: where the box's wall and top end an episode, the gate keeps the gripper
+/// clear of every part of it, and a release over the opening still succeeds.
+#[test]
+fn the_ring_hoop_leaves_nothing_to_touch_behind_the_gate() {
+    let ring = EnvOptions {
+        hoop: HoopShape::Ring,
+        ..EnvOptions::default()
+    };
+    let mut env = Placing::with_options(ring);
+    env.reset(12);
+    fly_to(&mut env, [-0.35, 0.0, 0.9]);
+    for _ in 0..20 {
+        let step = env.step(&[1.0, 0.0, 0.0, 1.0]);
+        assert!(
+            !step.done(),
+            "the box's wall would have ended it here: {:?}",
+            step.obs
+        );
+    }
+    let x = placing_obs(&env)[0];
+    assert!(
+        (-0.25..=-0.17).contains(&x),
+        "the gate stops it short of the no-entry box: x = {x}"
+    );
+    env.reset(13);
+    fly_to(&mut env, [-0.21, 0.0, 1.1]);
+    for _ in 0..40 {
+        assert!(
+            !env.step(&[0.0, 0.0, -0.5, 1.0]).done(),
+            "nothing under the ring's -x side"
+        );
+    }
+    assert!(placing_obs(&env)[2] < placing::HOOP_TOP_Z - 0.1);
+    fly_to(&mut env, [0.0, 0.0, 1.05]);
+    let (step, _) = open_until_done(&mut env);
+    assert_eq!(step.outcome, Some(Outcome::Success));
+}
+
+/// The authors' scene run from their fork (docs/results/calibration/): 200 random episodes
+/// last 71.6 steps, none touches the hoop and none succeeds. The ring with their release point
+/// (eight net "open" steps) gives the same: a release after n net opens with nothing to touch
+/// lasts n(n + 1) = 72 steps on average.
+#[test]
+fn random_play_on_the_ring_with_the_authors_release_matches_their_scene() {
+    let authors_scene = EnvOptions {
+        hoop: HoopShape::Ring,
+        release_at: 0.92,
+        ..EnvOptions::default()
+    };
+    let (s, _) = run_episodes_with(Task::Placing, &authors_scene, SimplePolicy::Random, 200, 0);
+    assert!(
+        (60.0..=85.0).contains(&s.mean_length) && s.success_rate <= 0.02,
+        "{s:?}"
+    );
+    let (ours, _) = run_episodes(Task::Placing, SimplePolicy::Random, 200, 0);
+    assert!(
+        ours.mean_length > s.mean_length + 15.0,
+        "{ours:?} against {s:?}"
+    );
 }
 
 // ---------------------------------------------------------------- Placing: the authors' gripper

@@ -5,7 +5,9 @@ use serde::{Deserialize, Serialize};
 
 use super::{SceneGraphChoice, SettingsError};
 use crate::scene_graph::SceneGraph;
-use crate::sim::{EnvOptions, GripObservation, PlacingSuccess, Start, Task, TaskRef, Variant};
+use crate::sim::{
+    EnvOptions, GripObservation, HoopShape, PlacingSuccess, Start, Task, TaskRef, Variant,
+};
 
 /// The scene graph's options.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
@@ -39,6 +41,10 @@ pub struct EnvSection {
     /// Placing (authors' variant): the ball drops once the gripper's level is at or below this.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub release_at: Option<f32>,
+    /// Placing: `box` (tasks.md's closed basket) or `ring` (the authors' scene's ring on an
+    /// overhang and a pole, which the gated gripper cannot touch).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hoop: Option<HoopShape>,
 }
 
 impl SceneGraphSection {
@@ -100,6 +106,7 @@ impl EnvSection {
             success: placing.then(|| env.placing_success()),
             observe_grip: placing.then_some(env.observe_grip),
             release_at: placing.then_some(env.release_at),
+            hoop: placing.then_some(env.hoop),
         }
     }
 
@@ -153,6 +160,10 @@ impl EnvSection {
                 ));
             }
             env.release_at = r;
+        }
+        if let Some(h) = self.hoop {
+            placing_only("hoop")?;
+            env.hoop = h;
         }
         Ok(())
     }

@@ -7,7 +7,7 @@ use crate::guidance::query_rule::UcbForm;
 use crate::rl::ActorMix;
 use crate::rl::kernels::KernelPath;
 use crate::scene_graph::SceneGraph;
-use crate::sim::{GripObservation, PlacingSuccess, Variant};
+use crate::sim::{GripObservation, HoopShape, PlacingSuccess, Variant};
 
 fn dref(task: Task, settings: &Settings) -> Result<EvaluativeRunConfig, SettingsError> {
     settings.evaluative(task, EvaluativeMethod::Dref, 0)
@@ -66,7 +66,7 @@ fn evaluative_settings_reach_the_run() {
     let s = Settings::from_json(json!({
         "hidden": [32, 32], "c": 0.5, "k": 7, "ucb": "paper", "batch_size": 64,
         "lambda": 2.0, "mix": "paper", "reward_scale": 0.1, "variant": "uniform",
-        "release_at": 0.9, "observe_grip": "level", "success": "through"
+        "release_at": 0.9, "observe_grip": "level", "success": "through", "hoop": "ring"
     }))
     .unwrap();
     let c = dref(Task::Placing, &s).unwrap();
@@ -81,6 +81,7 @@ fn evaluative_settings_reach_the_run() {
     assert_eq!(c.env.release_at, 0.9);
     assert_eq!(c.env.observe_grip, GripObservation::Level);
     assert_eq!(c.env.placing_success(), PlacingSuccess::Through);
+    assert_eq!(c.env.hoop, HoopShape::Ring);
 }
 
 #[test]
@@ -102,6 +103,9 @@ fn settings_of_other_tasks_and_methods_are_refused() {
     assert!(dref(Task::Reaching, &one(json!({"side_engines_on_a0": true}))).is_err());
     assert!(dref(Task::LunarLander, &one(json!({"side_engines_on_a0": true}))).is_ok());
     assert!(dref(Task::Reaching, &one(json!({"release_at": 0.9}))).is_err());
+    let e = dref(Task::Reaching, &one(json!({"hoop": "ring"}))).unwrap_err();
+    assert_eq!(e.to_string(), "hoop applies to placing only, not reaching");
+    assert!(Settings::from_json(json!({"hoop": "basket"})).is_err());
     assert!(dref(Task::LunarLander, &one(json!({"variant": "uniform"}))).is_err());
     let e = one(json!({"c": 0.3}))
         .preference(Task::Reaching, QueryMethod::Drpl, 0)

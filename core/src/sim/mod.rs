@@ -25,6 +25,6 @@ pub use env::{
 };
 pub use frame::{ImageFrame, MediaType};
 pub use options::{
-    DEFAULT_RELEASE_AT, EnvOptions, GripObservation, PlacingSuccess, Start, Variant,
+    DEFAULT_RELEASE_AT, EnvOptions, GripObservation, HoopShape, PlacingSuccess, Start, Variant,
 };
 pub use task::{DeclaredTask, Task, TaskRef, UnknownTask};

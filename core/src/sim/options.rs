@@ -62,6 +62,28 @@ pub enum GripObservation {
     Level,
 }
 
+/// Placing's hoop, the solid parts the gripper must not touch.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(utoipa::ToSchema))]
+#[serde(rename_all = "snake_case")]
+pub enum HoopShape {
+    /// tasks.md's hoop: a closed box 0.5 x 0.3 x 0.25 m with the square opening in its top; its
+    /// wall stands 6.5 cm in front of the home pose.
+    #[default]
+    Box,
+    /// \[authors\] Their scene's `BasketHoopObject`: a thin square ring (the opening's edge)
+    /// at the top, carried by an overhang and a pole on the far side (+x), over a base plate.
+    /// Behind the safety gate the gripper cannot reach any of it (their random play never
+    /// touched it: docs/results/calibration/).
+    Ring,
+}
+
+impl HoopShape {
+    pub(crate) fn is_box(&self) -> bool {
+        *self == HoopShape::Box
+    }
+}
+
 /// Placing's default release point: the ball drops once c <= 0.88, twelve net "open" steps
 /// from closed. Calibrated against the authors' random-policy episodes (tasks.md; the figures
 /// are in `docs/results/calibration/`).
@@ -81,6 +103,10 @@ pub struct EnvOptions {
     pub observe_grip: GripObservation,
     /// Placing (authors' variant): the ball is released when c <= `release_at`.
     pub release_at: f32,
+    /// Placing's hoop. Left out of a config when it is the default box, so the configs of runs
+    /// made before it existed read back equal.
+    #[serde(skip_serializing_if = "HoopShape::is_box")]
+    pub hoop: HoopShape,
 }
 
 impl Default for EnvOptions {
@@ -91,6 +117,7 @@ impl Default for EnvOptions {
             success: None,
             observe_grip: GripObservation::Sign,
             release_at: DEFAULT_RELEASE_AT,
+            hoop: HoopShape::Box,
         }
     }
 }

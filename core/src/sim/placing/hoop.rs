@@ -1,8 +1,9 @@
-//! Placing's fixed scene: the table, the hoop (a basket with a square opening in its top) and
-//! the safety gate's workspace and no-entry box around it.
+//! Placing's fixed scene: the table, the hoop (tasks.md's basket with a square opening in its
+//! top, or the authors' ring on an overhang and a pole) and the safety gate's workspace and
+//! no-entry box around it.
 
-use super::super::Cuboid;
 use super::super::tabletop::{self, Part, Region, TABLE_TOP_Z, TableWorld};
+use super::super::{Cuboid, HoopShape};
 
 /// The hoop's outer half sizes in x and y; it stands on the table centred at (0, 0).
 pub const HOOP_HALF_X: f32 = 0.25;
@@ -92,18 +93,60 @@ pub(crate) fn top_plates() -> [Cuboid; 4] {
     ]
 }
 
-/// All solid parts of the hoop, walls first.
-pub(crate) fn parts() -> Vec<Cuboid> {
-    walls().into_iter().chain(top_plates()).collect()
+/// The authors' `BasketHoopObject` as their scene places it (read from their MuJoCo model):
+/// four 1 cm bars framing the opening at the top (z 0.99 to 1.0), the overhang that carries the
+/// ring from the far side (+x), and the pole under it, standing on a 1 cm base plate. Returned
+/// as (ring and overhang, pole and base); the ring's short bars fit between its long ones, so no
+/// two parts overlap.
+pub(crate) fn ring_parts() -> ([Cuboid; 5], [Cuboid; 2]) {
+    let (zc, hz) = (HOOP_TOP_Z - SHEET / 2.0, SHEET / 2.0);
+    let bar = OPENING_HALF - SHEET / 2.0;
+    let top = [
+        slab([0.0, -bar, zc], [OPENING_HALF, hz, hz]),
+        slab([0.0, bar, zc], [OPENING_HALF, hz, hz]),
+        slab([-bar, 0.0, zc], [hz, OPENING_HALF - SHEET, hz]),
+        slab([bar, 0.0, zc], [hz, OPENING_HALF - SHEET, hz]),
+        // The overhang, from the ring's far edge to the pole.
+        slab([0.175, 0.0, zc], [0.075, hz, hz]),
+    ];
+    let base_top = TABLE_TOP_Z + SHEET;
+    let pole_bottom_top = (base_top, HOOP_TOP_Z - SHEET);
+    let stand = [
+        slab(
+            [0.245, 0.0, (pole_bottom_top.0 + pole_bottom_top.1) / 2.0],
+            [hz, hz, (pole_bottom_top.1 - pole_bottom_top.0) / 2.0],
+        ),
+        slab([0.0, 0.0, TABLE_TOP_Z + hz], [HOOP_HALF_X, HOOP_HALF_Y, hz]),
+    ];
+    (top, stand)
 }
 
-/// Add the hoop to a table-top world.
-pub(crate) fn add_to(world: &mut TableWorld) {
-    for w in walls() {
-        world.add_fixed(&w, Part::HoopWall);
+/// All solid parts of `shape`'s hoop, walls first.
+pub(crate) fn parts(shape: HoopShape) -> Vec<Cuboid> {
+    match shape {
+        HoopShape::Box => walls().into_iter().chain(top_plates()).collect(),
+        HoopShape::Ring => {
+            let (top, stand) = ring_parts();
+            stand.into_iter().chain(top).collect()
+        }
     }
-    for p in top_plates() {
-        world.add_fixed(&p, Part::HoopTop);
+}
+
+/// Add `shape`'s hoop to a table-top world: what stands on the table as walls (a free ball that
+/// lands there has missed), the top as the ring's plates.
+pub(crate) fn add_to(world: &mut TableWorld, shape: HoopShape) {
+    let (walls, tops): (Vec<Cuboid>, Vec<Cuboid>) = match shape {
+        HoopShape::Box => (walls().to_vec(), top_plates().to_vec()),
+        HoopShape::Ring => {
+            let (top, stand) = ring_parts();
+            (stand.to_vec(), top.to_vec())
+        }
+    };
+    for w in &walls {
+        world.add_fixed(w, Part::HoopWall);
+    }
+    for p in &tops {
+        world.add_fixed(p, Part::HoopTop);
     }
 }
 

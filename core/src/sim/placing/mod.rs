@@ -42,8 +42,8 @@ use super::tabletop::{
     self, CONTROL_DT, CONTROL_HZ, MAX_EPISODE_STEPS, Part, TableWorld, clip_action, gated_move,
 };
 use super::{
-    BoxSpace, Env, EnvOptions, EnvSpec, Geometry, GripObservation, Outcome, PlacingSuccess,
-    RenderState, Start, Step, Variant,
+    BoxSpace, Env, EnvOptions, EnvSpec, Geometry, GripObservation, HoopShape, Outcome,
+    PlacingSuccess, RenderState, Start, Step, Variant,
 };
 pub use heuristic::heuristic;
 pub use hoop::{
@@ -127,7 +127,7 @@ impl Placing {
         Self {
             spec,
             options,
-            world: Self::build_world([-0.4, 0.0, 1.3]),
+            world: Self::build_world([-0.4, 0.0, 1.3], options.hoop),
             ball: Ball::Held,
             gripper_closed: true,
             grip_level: 1.0,
@@ -137,9 +137,9 @@ impl Placing {
         }
     }
 
-    fn build_world(gripper: [f32; 3]) -> TableWorld {
+    fn build_world(gripper: [f32; 3], hoop_shape: HoopShape) -> TableWorld {
         let mut world = TableWorld::new(&hoop::table(), gripper, SUBSTEP_DT);
-        hoop::add_to(&mut world);
+        hoop::add_to(&mut world, hoop_shape);
         world.refresh();
         world
     }
@@ -238,7 +238,7 @@ impl Env for Placing {
 
     fn reset(&mut self, seed: u64) -> Vec<f32> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let mut world = Self::build_world([0.0, 0.0, 1.3]);
+        let mut world = Self::build_world([0.0, 0.0, 1.3], self.options.hoop);
         let (step, reset_action) = match self.options.variant {
             Variant::Authors => (STEP_SIZE, RESET_ACTION),
             Variant::Uniform => (UNIFORM_STEP_SIZE, 1.0),
@@ -343,7 +343,7 @@ impl Env for Placing {
     fn geometry(&self) -> Geometry {
         Geometry::Placing {
             table: hoop::table(),
-            hoop_parts: hoop::parts(),
+            hoop_parts: hoop::parts(self.options.hoop),
             opening: [-OPENING_HALF, -OPENING_HALF, OPENING_HALF, OPENING_HALF],
             hoop_top_z: HOOP_TOP_Z,
             ball_radius: BALL_RADIUS,
