@@ -121,31 +121,31 @@ pub(crate) fn ring_parts() -> ([Cuboid; 5], [Cuboid; 2]) {
     (top, stand)
 }
 
-/// All solid parts of `shape`'s hoop, walls first.
-pub(crate) fn parts(shape: HoopShape) -> Vec<Cuboid> {
+/// `shape`'s hoop as (what stands on the table, the top): a free ball that lands on the first
+/// has missed; the second is the ring or the plates around the opening.
+fn walls_and_top(shape: HoopShape) -> (Vec<Cuboid>, Vec<Cuboid>) {
     match shape {
-        HoopShape::Box => walls().into_iter().chain(top_plates()).collect(),
-        HoopShape::Ring => {
-            let (top, stand) = ring_parts();
-            stand.into_iter().chain(top).collect()
-        }
-    }
-}
-
-/// Add `shape`'s hoop to a table-top world: what stands on the table as walls (a free ball that
-/// lands there has missed), the top as the ring's plates.
-pub(crate) fn add_to(world: &mut TableWorld, shape: HoopShape) {
-    let (walls, tops): (Vec<Cuboid>, Vec<Cuboid>) = match shape {
         HoopShape::Box => (walls().to_vec(), top_plates().to_vec()),
         HoopShape::Ring => {
             let (top, stand) = ring_parts();
             (stand.to_vec(), top.to_vec())
         }
-    };
+    }
+}
+
+/// All solid parts of `shape`'s hoop, walls first.
+pub(crate) fn parts(shape: HoopShape) -> Vec<Cuboid> {
+    let (walls, top) = walls_and_top(shape);
+    walls.into_iter().chain(top).collect()
+}
+
+/// Add `shape`'s hoop to a table-top world.
+pub(crate) fn add_to(world: &mut TableWorld, shape: HoopShape) {
+    let (walls, top) = walls_and_top(shape);
     for w in &walls {
         world.add_fixed(w, Part::HoopWall);
     }
-    for p in &tops {
+    for p in &top {
         world.add_fixed(p, Part::HoopTop);
     }
 }
