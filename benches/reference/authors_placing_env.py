@@ -81,6 +81,16 @@ def action(policy: str) -> np.ndarray:
     return a
 
 
+def end_reason(printed: io.StringIO, reward: float) -> str:
+    """How an episode ended: the last line the authors' environment printed ("ball dropped",
+    "gripper collision: hoop", "arm collision"), "success" when it paid, "time limit" when it
+    printed nothing."""
+    if reward > 0:
+        return "success"
+    lines = printed.getvalue().strip().splitlines()
+    return lines[-1] if lines else "time limit"
+
+
 def episode(env: Any, policy: str) -> tuple[str, int, list[float]]:
     """(how it ended, agent steps, gripper position at the start). The authors' environment prints
     its reason for ending ("ball dropped", "gripper collision: hoop", "arm collision", "success");
@@ -96,10 +106,7 @@ def episode(env: Any, policy: str) -> tuple[str, int, list[float]]:
             total += reward
             if done:
                 break
-    lines = printed.getvalue().strip().splitlines()
-    if total > 0:
-        return "success", steps, start
-    return (lines[-1] if lines else "time limit"), steps, start
+    return end_reason(printed, total), steps, start
 
 
 def sb3_run(env: Any, seed: int, steps: int) -> dict[str, Any]:
@@ -129,9 +136,7 @@ def sb3_run(env: Any, seed: int, steps: int) -> dict[str, Any]:
                 obs, reward, done, _ = env.step(np.array(a, dtype=np.float64))
             self.t += 1
             if done:
-                lines = printed.getvalue().strip().splitlines()
-                end = "success" if reward > 0 else (lines[-1] if lines else "time limit")
-                self.ends.append((self.t, end))
+                self.ends.append((self.t, end_reason(printed, reward)))
             return obs["eef_xyz_gripper"].astype(np.float32), float(reward), bool(done), False, {}
 
     torch.set_num_threads(1)

@@ -93,14 +93,22 @@ pub(crate) fn top_plates() -> [Cuboid; 4] {
     ]
 }
 
-/// The authors' `BasketHoopObject` as their scene places it (read from their MuJoCo model):
-/// four 1 cm bars framing the opening at the top (z 0.99 to 1.0), the overhang that carries the
-/// ring from the far side (+x), and the pole under it, standing on a 1 cm base plate. Returned
-/// as (ring and overhang, pole and base); the ring's short bars fit between its long ones, so no
-/// two parts overlap.
-pub(crate) fn ring_parts() -> ([Cuboid; 5], [Cuboid; 2]) {
+/// The authors' `BasketHoopObject` as their scene places it (read from their MuJoCo model), as
+/// (what stands on the table, the top): the pole on the far side (+x) standing on a 1 cm base
+/// plate; four 1 cm bars framing the opening at the top (z 0.99 to 1.0) and the overhang that
+/// carries them from the pole. The ring's short bars fit between its long ones, so no two parts
+/// overlap.
+fn ring_parts() -> ([Cuboid; 2], [Cuboid; 5]) {
     let (zc, hz) = (HOOP_TOP_Z - SHEET / 2.0, SHEET / 2.0);
     let bar = OPENING_HALF - SHEET / 2.0;
+    let (pole_bottom, pole_top) = (TABLE_TOP_Z + SHEET, HOOP_TOP_Z - SHEET);
+    let stand = [
+        slab(
+            [0.245, 0.0, (pole_bottom + pole_top) / 2.0],
+            [hz, hz, (pole_top - pole_bottom) / 2.0],
+        ),
+        slab([0.0, 0.0, TABLE_TOP_Z + hz], [HOOP_HALF_X, HOOP_HALF_Y, hz]),
+    ];
     let top = [
         slab([0.0, -bar, zc], [OPENING_HALF, hz, hz]),
         slab([0.0, bar, zc], [OPENING_HALF, hz, hz]),
@@ -109,16 +117,7 @@ pub(crate) fn ring_parts() -> ([Cuboid; 5], [Cuboid; 2]) {
         // The overhang, from the ring's far edge to the pole.
         slab([0.175, 0.0, zc], [0.075, hz, hz]),
     ];
-    let base_top = TABLE_TOP_Z + SHEET;
-    let pole_bottom_top = (base_top, HOOP_TOP_Z - SHEET);
-    let stand = [
-        slab(
-            [0.245, 0.0, (pole_bottom_top.0 + pole_bottom_top.1) / 2.0],
-            [hz, hz, (pole_bottom_top.1 - pole_bottom_top.0) / 2.0],
-        ),
-        slab([0.0, 0.0, TABLE_TOP_Z + hz], [HOOP_HALF_X, HOOP_HALF_Y, hz]),
-    ];
-    (top, stand)
+    (stand, top)
 }
 
 /// `shape`'s hoop as (what stands on the table, the top): a free ball that lands on the first
@@ -127,7 +126,7 @@ fn walls_and_top(shape: HoopShape) -> (Vec<Cuboid>, Vec<Cuboid>) {
     match shape {
         HoopShape::Box => (walls().to_vec(), top_plates().to_vec()),
         HoopShape::Ring => {
-            let (top, stand) = ring_parts();
+            let (stand, top) = ring_parts();
             (stand.to_vec(), top.to_vec())
         }
     }
@@ -177,6 +176,30 @@ mod tests {
                 .iter()
                 .all(|p| (top_z(p) - HOOP_TOP_Z).abs() < 1e-6)
         );
+    }
+
+    #[test]
+    fn ring_parts_do_not_overlap_and_leave_the_opening_clear() {
+        let parts = parts(HoopShape::Ring);
+        let overlap = |a: &Cuboid, b: &Cuboid| {
+            (0..3).all(|i| {
+                (a.center[i] - b.center[i]).abs() < a.half_extents[i] + b.half_extents[i] - 1e-6
+            })
+        };
+        for (i, a) in parts.iter().enumerate() {
+            for b in &parts[i + 1..] {
+                assert!(!overlap(a, b), "{a:?} and {b:?}");
+            }
+        }
+        // Nothing above the base plate reaches inside the ring's inner edge, and nothing stands
+        // above the top.
+        let inner = OPENING_HALF - SHEET;
+        for c in &parts {
+            let above_base = c.center[2] - c.half_extents[2] > TABLE_TOP_Z + SHEET - 1e-6;
+            let reaches_in = (0..2).all(|i| c.center[i].abs() - c.half_extents[i] < inner - 1e-6);
+            assert!(!(above_base && reaches_in), "{c:?} intrudes on the opening");
+            assert!(top_z(c) <= HOOP_TOP_Z + 1e-6);
+        }
     }
 
     #[test]
