@@ -16,6 +16,7 @@ static GLOBAL: support::counting_alloc::Counting = support::counting_alloc::Coun
 mod belief_no_alloc;
 mod env_contract;
 mod lunar_lander;
+mod placing;
 mod rl_gradients;
 mod rl_no_alloc;
 mod sac;
