@@ -8,6 +8,7 @@
 mod report_fixtures;
 mod support;
 
+mod api_surface;
 mod browser;
 mod cli;
 mod datasets;
@@ -32,3 +33,4 @@ mod studies;
 mod study_pilot;
 mod train_e2e;
 mod ws_sessions;
+mod ws_undo;
