@@ -2,9 +2,12 @@
 //! from any directory and after `cargo install --path .`. `--web-dir` and `--models-dir` still
 //! point the server at files on disk (for development).
 //!
-//! Release builds embed the files at compile time; debug builds read them from the repository
-//! at run time from their absolute path (rust-embed's default), so editing `web/` needs no rebuild
-//! during development.
+//! Every build embeds the files at compile time, debug builds too (rust-embed's `debug-embed`):
+//! by default a debug build would read them at run time from the absolute path of the checkout
+//! that compiled it, and with CI's clones sharing one target directory a later `cargo test` in
+//! another checkout could serve a deleted clone's files (nothing: every page 404s) or a stale
+//! one's. `build.rs` rebuilds when a file in `web/` or `models/` changes or is added; to edit the
+//! pages without rebuilding, serve them with `--web-dir web`.
 
 use std::borrow::Cow;
 
