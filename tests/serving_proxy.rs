@@ -144,17 +144,14 @@ async fn trainers_through_a_round_robin_proxy_lose_nothing_when_a_server_is_kill
     };
     let mut db = sqlx::PgConnection::connect(&pg.url).await.unwrap();
     let (dir_a, dir_b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
-    let (mut a, api_a) = start(dir_a.path(), &pg.url, "4");
-    let (mut b, api_b) = start(dir_b.path(), &pg.url, "4");
-    let addr = |api: &Api| api.base.trim_start_matches("http://").to_owned();
-    let (addr_a, addr_b) = (addr(&api_a), addr(&api_b));
-    let proxy = Proxy::start(&[addr_a.parse().unwrap(), addr_b.parse().unwrap()]);
-
-    // Half the sessions launched on each server, which claims them at once: both run some.
+    // Server A alone, two slots: every session is launched on it, it claims two and two wait
+    // queued. Server B, four slots, claims those two as it starts and has room for A's after
+    // the kill. (With both up before the launches, a launch's own claim races the other
+    // server's claim tick, and one server could end up with every session.)
+    let (mut a, api_a) = start(dir_a.path(), &pg.url, "2");
     let mut sessions = Vec::new();
     for seed in 0..SESSIONS {
-        let api = if seed % 2 == 0 { &api_a } else { &api_b };
-        let (status, r) = api
+        let (status, r) = api_a
             .post(
                 "/api/sessions",
                 json!({"task": "reaching", "method": "ef-100", "trainer": "human", "seed": seed,
@@ -169,27 +166,39 @@ async fn trainers_through_a_round_robin_proxy_lose_nothing_when_a_server_is_kill
             token_of(r["trainer_url"].as_str().unwrap()),
         ));
     }
-    // Which server is which (`/healthz` names it); both must run some sessions.
     let id_a = api_a.get("/healthz").await["server"]
         .as_str()
         .unwrap()
         .to_owned();
+    wait_for("A runs two sessions", Duration::from_secs(30), async || {
+        let o = owners(&mut db).await;
+        let on_a = o
+            .values()
+            .filter(|(s, owner)| s == "running" && owner.as_deref() == Some(id_a.as_str()))
+            .count();
+        let queued = o.values().filter(|(s, _)| s == "queued").count();
+        (on_a == 2 && queued == 2).then_some(())
+    })
+    .await;
+    let (mut b, api_b) = start(dir_b.path(), &pg.url, "4");
+    let addr = |api: &Api| api.base.trim_start_matches("http://").to_owned();
+    let (addr_a, addr_b) = (addr(&api_a), addr(&api_b));
+    let proxy = Proxy::start(&[addr_a.parse().unwrap(), addr_b.parse().unwrap()]);
     let id_b = api_b.get("/healthz").await["server"]
         .as_str()
         .unwrap()
         .to_owned();
     let servers = (id_a, id_b);
     wait_for(
-        "both servers run some",
+        "B runs the other two",
         Duration::from_secs(30),
         async || {
             let o = owners(&mut db).await;
-            let running = o.values().filter(|(s, _)| s == "running").count();
-            let on = |server: &str| {
-                o.values()
-                    .any(|(_, owner)| owner.as_deref() == Some(server))
-            };
-            (running == SESSIONS as usize && on(&servers.0) && on(&servers.1)).then_some(())
+            let on_b = o
+                .values()
+                .filter(|(s, owner)| s == "running" && owner.as_deref() == Some(servers.1.as_str()))
+                .count();
+            (on_b == 2).then_some(())
         },
     )
     .await;
