@@ -1,6 +1,7 @@
 //! Placing through the public `Env` interface: the ball's fate under both grippers and both
 //! hoops, the authors' gradual gripper and start, and the safety gate around the hoop.
 
+use crate::support::episodes::run_until_done;
 use dualrep_core::sim::placing::{self, Placing};
 use dualrep_core::sim::rollout::{SimplePolicy, run_episodes, run_episodes_with};
 use dualrep_core::sim::{
@@ -50,16 +51,10 @@ fn fly_to(env: &mut Placing, target: [f32; 3]) {
     panic!("did not reach {target:?}: at {:?}", env.observation());
 }
 
-/// Open the gripper and stand still until the episode ends; the last step and the number of
+/// Open the gripper and stand still until the episode ends; the last step and how many "open"
 /// steps it took.
-fn release_and_wait(env: &mut Placing) -> (Step, u32) {
-    for n in 1..=100 {
-        let step = env.step(&[0.0, 0.0, 0.0, -1.0]);
-        if step.done() {
-            return (step, n);
-        }
-    }
-    panic!("the released ball was never decided");
+fn open_until_done(env: &mut Placing) -> (Step, u32) {
+    run_until_done(env, &[0.0, 0.0, 0.0, -1.0])
 }
 
 fn ball(env: &Placing) -> ([f32; 3], bool) {
@@ -77,7 +72,7 @@ fn ball_released_over_the_ring_falls_through() {
     env.reset(7);
     fly_to(&mut env, [0.0, 0.0, 1.05]);
     assert!(ball(&env).1, "the ball starts held");
-    let (step, n) = release_and_wait(&mut env);
+    let (step, n) = open_until_done(&mut env);
     assert_eq!(step.outcome, Some(Outcome::Success));
     assert!(step.terminated && step.reward == 100.0);
     assert!(n <= 3, "a 5 cm drop takes about 0.1 s, took {n} steps");
@@ -91,7 +86,7 @@ fn ball_released_over_the_ring_off_centre_still_falls_through() {
     let mut env = uniform_placing();
     env.reset(8);
     fly_to(&mut env, [0.05, -0.05, 1.2]);
-    let (step, _) = release_and_wait(&mut env);
+    let (step, _) = open_until_done(&mut env);
     assert_eq!(step.outcome, Some(Outcome::Success));
 }
 
@@ -100,7 +95,7 @@ fn ball_released_over_the_table_away_from_the_hoop_fails() {
     let mut env = uniform_placing();
     env.reset(9);
     fly_to(&mut env, [-0.45, 0.2, 1.2]);
-    let (step, _) = release_and_wait(&mut env);
+    let (step, _) = open_until_done(&mut env);
     assert_eq!(step.outcome, Some(Outcome::Failure));
     assert!(step.terminated && step.reward == 0.0);
 }
@@ -110,7 +105,7 @@ fn ball_released_over_the_closed_top_rests_there_and_fails_after_two_seconds() {
     let mut env = uniform_placing();
     env.reset(10);
     fly_to(&mut env, [0.17, 0.0, 1.06]);
-    let (step, n) = release_and_wait(&mut env);
+    let (step, n) = open_until_done(&mut env);
     assert_eq!(step.outcome, Some(Outcome::Failure));
     assert_eq!(n, 40, "2 s at 20 Hz");
     let (b, _) = ball(&env);
@@ -233,17 +228,6 @@ fn random_play_on_the_ring_with_the_authors_release_matches_their_scene() {
 }
 
 // ---------------------------------------------------------------- Placing: the authors' gripper
-
-/// Send "open" until the episode ends; the last step and how many "open" steps it took.
-fn open_until_done(env: &mut Placing) -> (Step, u32) {
-    for n in 1..=300 {
-        let step = env.step(&[0.0, 0.0, 0.0, -1.0]);
-        if step.done() {
-            return (step, n);
-        }
-    }
-    panic!("the gripper never let go");
-}
 
 #[test]
 fn authors_gripper_lets_go_after_twelve_open_steps_over_the_ring_and_succeeds_at_once() {

@@ -2,12 +2,11 @@
 //! Reaching's safety gate, the horizon, determinism, specs and geometry (Placing's ball,
 //! gripper, hoops and gate: `placing.rs`).
 
+use crate::support::episodes::run_until_done;
 use dualrep_core::sim::placing::Placing;
 use dualrep_core::sim::reaching::{self, Reaching};
 use dualrep_core::sim::rollout::{SimplePolicy, run_episodes, run_episodes_with};
-use dualrep_core::sim::{
-    Env, EnvOptions, Geometry, Outcome, RenderState, Start, Step, Task, Variant,
-};
+use dualrep_core::sim::{Env, EnvOptions, Geometry, Outcome, RenderState, Start, Task, Variant};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -139,16 +138,6 @@ fn reaching_gate_stops_at_each_table_edge_and_lets_the_gripper_back() {
 }
 
 // ---------------------------------------------------------------- horizon
-
-fn run_until_done(env: &mut dyn Env, action: &[f32]) -> (Step, u32) {
-    for n in 1..=2000 {
-        let step = env.step(action);
-        if step.done() {
-            return (step, n);
-        }
-    }
-    panic!("no end in 2000 steps");
-}
 
 #[test]
 fn reset_moves_count_toward_the_horizon_and_episodes_truncate_at_1000() {

@@ -1,3 +1,4 @@
 //! Helpers shared by the core crate's integration tests.
 
 pub mod counting_alloc;
+pub mod episodes;
