@@ -77,6 +77,20 @@ function ball(ctx, T, x, y, radius, dpr) {
   ctx.restore();
 }
 
+/** The hoop's boxes projected on x and world axis `up` (1: from above, 2: from the side). */
+function hoopParts(ctx, T, parts, up, fill, dpr) {
+  ctx.fillStyle = fill;
+  ctx.strokeStyle = COLORS.hoopEdge;
+  ctx.lineWidth = 1 * dpr;
+  for (const p of parts) {
+    const [cx, hx, cu, hu] = [p.center[0], p.half_extents[0], p.center[up], p.half_extents[up]];
+    ctx.beginPath();
+    rect(ctx, T, cx - hx, cu - hu, cx + hx, cu + hu);
+    ctx.fill();
+    ctx.stroke();
+  }
+}
+
 export function drawReaching(ctx, T, g, s, opts, dpr) {
   ctx.fillStyle = "#f1efe9";
   ctx.fillRect(0, 0, ctx.canvas.width, ctx.canvas.height);
@@ -110,15 +124,7 @@ export function drawPlacingTop(ctx, T, g, s, opts, dpr) {
   dashedRect(ctx, T, w[0], w[1], w[3], w[4], COLORS.workspace, dpr);
   dashedRect(ctx, T, n[0], n[1], n[3], n[4], COLORS.noEntry, dpr);
   // The hoop's parts from above; the opening is a dark hole.
-  ctx.fillStyle = COLORS.hoop;
-  ctx.strokeStyle = COLORS.hoopEdge;
-  ctx.lineWidth = 1 * dpr;
-  for (const p of g.hoop_parts) {
-    ctx.beginPath();
-    rect(ctx, T, p.center[0] - p.half_extents[0], p.center[1] - p.half_extents[1], p.center[0] + p.half_extents[0], p.center[1] + p.half_extents[1]);
-    ctx.fill();
-    ctx.stroke();
-  }
+  hoopParts(ctx, T, g.hoop_parts, 1, COLORS.hoop, dpr);
   const o = g.opening;
   ctx.fillStyle = COLORS.opening;
   ctx.beginPath();
@@ -150,15 +156,7 @@ export function drawPlacingSide(ctx, T, g, s, opts, dpr) {
   const n = g.no_entry;
   dashedRect(ctx, T, w[0], w[2], w[3], w[5], COLORS.workspace, dpr);
   dashedRect(ctx, T, n[0], n[2], n[3], n[5], COLORS.noEntry, dpr);
-  ctx.fillStyle = "rgba(140, 150, 163, 0.55)";
-  ctx.strokeStyle = COLORS.hoopEdge;
-  ctx.lineWidth = 1 * dpr;
-  for (const p of g.hoop_parts) {
-    ctx.beginPath();
-    rect(ctx, T, p.center[0] - p.half_extents[0], p.center[2] - p.half_extents[2], p.center[0] + p.half_extents[0], p.center[2] + p.half_extents[2]);
-    ctx.fill();
-    ctx.stroke();
-  }
+  hoopParts(ctx, T, g.hoop_parts, 2, "rgba(140, 150, 163, 0.55)", dpr);
   // The opening's rim.
   ctx.strokeStyle = COLORS.opening;
   ctx.lineWidth = 3 * dpr;
