@@ -15,12 +15,12 @@ benches/reference/authors_runs.py and their env by authors_placing_env.py (the R
 
 from __future__ import annotations
 
-import csv
 import math
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
+from curves import episodes  # noqa: E402
 from rows import exact_p_above, learns, mean_se, runs  # noqa: E402
 
 # The authors' Placing SAC, 7 logged runs, cumulative true sums (100 a success).
@@ -33,11 +33,7 @@ EARLY_STEPS = 15_000
 
 
 def first_success(seed_dir: Path) -> int | None:
-    with open(seed_dir / "metrics.csv") as f:
-        for row in csv.DictReader(f):
-            if row["outcome"] == "success":
-                return int(row["step"])
-    return None
+    return next((int(e["step"]) for e in episodes(seed_dir) if e["outcome"] == "success"), None)
 
 
 def fisher_greater(a: int, n1: int, c: int, n2: int) -> float:
@@ -93,11 +89,9 @@ def main() -> None:
             cells += ["–", "", ""]
         cells.append(k(sac_box[seed]["cumulative_return"]) if seed in sac_box else "–")
         if seed in ef_ring:
-            run = ef_ring[seed]
-            no_success = " (no success)" if first_success(
-                root / f"placing-sac/ef-100-authors-scene/seed{seed}"
-            ) is None else ""
-            cells.append(k(run["cumulative_return"]) + no_success)
+            placed = first_success(root / f"placing-sac/ef-100-authors-scene/seed{seed}")
+            no_success = "" if placed is not None else " (no success)"
+            cells.append(k(ef_ring[seed]["cumulative_return"]) + no_success)
         else:
             cells.append("–")
         cells.append(k(ef_box[seed]["cumulative_return"]) if seed in ef_box else "–")
