@@ -21,6 +21,7 @@ import sys
 from pathlib import Path
 
 from curves import episodes, first_learnt
+from rows import mean_return, midranks
 
 STEPS = 150_000
 MARKS = (5_000, 15_000, 30_000)
@@ -50,7 +51,6 @@ def lunar_runs(root: Path) -> list[dict]:
             continue
         seen.add(digest)
         rows = episodes(run)
-        last = rows[-10:]
         runs.append(
             {
                 "run": str(run.relative_to(root)),
@@ -59,29 +59,14 @@ def lunar_runs(root: Path) -> list[dict]:
                 "reward": summary["cumulative_return"],
                 "answered": [answered_by(rows, mark) for mark in MARKS],
                 "learnt_at": first_learnt(rows, lunar_lander=True),
-                "last10": sum(float(e["return"]) for e in last) / len(last),
+                "last10": mean_return(rows[-10:]),
             }
         )
     return runs
 
 
-def ranks(values: list[float]) -> list[float]:
-    """Ranks from 1, ties sharing their mean rank."""
-    order = sorted(range(len(values)), key=lambda i: values[i])
-    out = [0.0] * len(values)
-    i = 0
-    while i < len(order):
-        j = i
-        while j + 1 < len(order) and values[order[j + 1]] == values[order[i]]:
-            j += 1
-        for k in range(i, j + 1):
-            out[order[k]] = (i + j) / 2 + 1
-        i = j + 1
-    return out
-
-
 def spearman(x: list[float], y: list[float]) -> float:
-    rx, ry = ranks(x), ranks(y)
+    rx, ry = midranks(x), midranks(y)
     mx, my = sum(rx) / len(rx), sum(ry) / len(ry)
     cov = sum((a - mx) * (b - my) for a, b in zip(rx, ry))
     vx = sum((a - mx) ** 2 for a in rx)

@@ -35,16 +35,21 @@ def runs(folder: Path) -> list[dict]:
         last = episodes[-10:]
         summary["last10_episodes"] = last
         summary["last10"] = sum(e["outcome"] == "success" for e in last)
-        summary["last10_return"] = sum(float(e["return"]) for e in last) / max(len(last), 1)
+        summary["last10_return"] = mean_return(last)
         rows.append(summary)
     return rows
+
+
+def mean_return(window: list[dict[str, str]]) -> float:
+    """The mean return of some episodes (metrics.csv rows); 0 for none."""
+    return sum(float(e["return"]) for e in window) / max(len(window), 1)
 
 
 def episodes_learnt(window: list[dict[str, str]], lunar_lander: bool) -> bool:
     """The report's rule over 10 episodes (metrics.csv rows): 8 or more succeed; on Lunar
     Lander, whose landings do not all score alike, their mean return is 200 or more."""
     if lunar_lander:
-        return sum(float(e["return"]) for e in window) / max(len(window), 1) >= 200.0
+        return mean_return(window) >= 200.0
     return sum(e["outcome"] == "success" for e in window) >= 8
 
 
@@ -62,6 +67,21 @@ def mean_se(values: list[float]) -> tuple[float, float]:
     return mean, math.sqrt(var / n)
 
 
+def midranks(values: list[float]) -> list[float]:
+    """Each value's rank from 1 in the input's order, tied values sharing their mean rank."""
+    order = sorted(range(len(values)), key=lambda i: values[i])
+    ranks = [0.0] * len(values)
+    i = 0
+    while i < len(order):
+        j = i
+        while j < len(order) and values[order[j]] == values[order[i]]:
+            j += 1
+        for k in order[i:j]:
+            ranks[k] = (i + j + 1) / 2
+        i = j
+    return ranks
+
+
 def u_statistic(xs: list[float], ys: list[float]) -> float:
     return sum(1.0 if x > y else 0.5 if x == y else 0.0 for x in xs for y in ys)
 
@@ -72,15 +92,7 @@ def exact_p_above(xs: list[float], ys: list[float]) -> tuple[float, float]:
     observed = u_statistic(xs, ys)
     n, m = len(xs), len(ys)
     # Midranks make U = R_x - n(n+1)/2 with ties counted as one half.
-    ranks: list[float] = []
-    i = 0
-    while i < len(pooled):
-        j = i
-        while j < len(pooled) and pooled[j] == pooled[i]:
-            j += 1
-        ranks.extend([(i + j + 1) / 2] * (j - i))
-        i = j
-    doubled = tuple(int(round(2 * r)) for r in ranks)
+    doubled = tuple(int(round(2 * r)) for r in midranks(pooled))
 
     @lru_cache(maxsize=None)
     def count(k: int, picks: int) -> dict[int, int]:
