@@ -46,6 +46,12 @@ pub struct QueryRuleSection {
     /// the rule is never silent for the whole repayment; 1: all, silent until repaid [default 1].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub opening_repay_share: Option<f64>,
+    /// With an opening: ask at most this share of its steps, in (0, 1], ranked as a woken rule
+    /// ranks (among the states of the last `wake_after` steps), so that the opening spends that
+    /// share; what passes the ceiling's earnings is repaid after as any opening's; 0: every step
+    /// the authors' ranking asks [default 0].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub opening_rate: Option<f64>,
     /// With a ceiling: let the rate run from this floor (recent answers all "good") up to
     /// `max_feedback_rate` (all "bad"); 0: a fixed rate [default 0].
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -70,6 +76,7 @@ impl QueryRuleSection {
             feedback_opening: Some(rule.ceiling.map_or(0, |x| x.opening)),
             feedback_start_empty: Some(rule.ceiling.is_some_and(|x| x.start_empty)),
             opening_repay_share: Some(rule.ceiling.map_or(1.0, |x| x.repay_share)),
+            opening_rate: Some(rule.ceiling.and_then(|x| x.opening_rate).unwrap_or(0.0)),
             min_feedback_rate: Some(rule.ceiling.and_then(|x| x.floor).unwrap_or(0.0)),
             wake_after: Some(rule.wake_after),
         }
@@ -168,6 +175,25 @@ impl QueryRuleSection {
             }
             if let Some(c) = the_ceiling(rule, "opening_repay_share", share == 1.0)? {
                 c.repay_share = share;
+            }
+        }
+        if let Some(rate) = self.opening_rate {
+            if !(rate.is_finite() && (0.0..=1.0).contains(&rate)) {
+                return Err(SettingsError::bad(
+                    "opening_rate",
+                    format!(
+                        "expected a share of the opening's steps in (0, 1], or 0 for all, got {rate}"
+                    ),
+                ));
+            }
+            if let Some(c) = the_ceiling(rule, "opening_rate", rate == 0.0)? {
+                if rate > 0.0 && c.opening == 0 {
+                    return Err(SettingsError::bad(
+                        "opening_rate",
+                        "the rule has no opening to pace; set feedback_opening too",
+                    ));
+                }
+                c.opening_rate = (rate > 0.0).then_some(rate);
             }
         }
         Ok(())
@@ -312,5 +338,55 @@ mod tests {
             ("opening_repay_share", "1"),
         ];
         assert_eq!(rule(&off, EvaluativeMethod::DrefAuthors), Ok(None));
+    }
+
+    #[test]
+    fn a_paced_opening_needs_an_opening_and_a_share_of_its_steps() {
+        let rule = |pairs: &[(&str, &str)], method| {
+            Settings::from_pairs(pairs.iter().copied())
+                .and_then(|s| s.evaluative(Task::LunarLander, method, 0))
+                .map(|c| c.query_rule.ceiling)
+                .map_err(|e| e.to_string())
+        };
+        let product = rule(&[], EvaluativeMethod::Dref).unwrap().unwrap();
+        assert_eq!(product.opening_rate, None, "off by default");
+        let paced = rule(
+            &[("feedback_opening", "15000"), ("opening_rate", "0.33")],
+            EvaluativeMethod::Dref,
+        );
+        let paced = paced.unwrap().unwrap();
+        assert_eq!((paced.opening, paced.opening_rate), (15_000, Some(0.33)));
+        let zero = rule(&[("opening_rate", "0")], EvaluativeMethod::Dref);
+        assert_eq!(zero.unwrap().unwrap().opening_rate, None);
+        assert_eq!(
+            rule(&[("opening_rate", "0")], EvaluativeMethod::DrefAuthors),
+            Ok(None),
+            "its off value on a rule without a ceiling"
+        );
+        for (pairs, method, words) in [
+            (
+                vec![("opening_rate", "1.5")],
+                EvaluativeMethod::Dref,
+                "(0, 1]",
+            ),
+            (
+                vec![("opening_rate", "-0.1")],
+                EvaluativeMethod::Dref,
+                "(0, 1]",
+            ),
+            (
+                vec![("opening_rate", "0.3"), ("feedback_opening", "0")],
+                EvaluativeMethod::Dref,
+                "no opening",
+            ),
+            (
+                vec![("opening_rate", "0.3")],
+                EvaluativeMethod::DrefAuthors,
+                "no ceiling",
+            ),
+        ] {
+            let e = rule(&pairs, method).unwrap_err();
+            assert!(e.contains("opening_rate") && e.contains(words), "{e}");
+        }
     }
 }

@@ -22,6 +22,17 @@
 //! the whole repayment (on Placing 12k-18k steps, in which a failing learner went unasked: the
 //! frozen episodes of docs/results/fig3/).
 //!
+//! An opening may also be paced (`opening_rate`, off by default): for its W steps the rule asks
+//! at most that share of them, from a bucket of its own (empty at the start, `burst` at most),
+//! and is ranked as a woken rule is, among the states of the last steps ([`QueryRule`]), so the
+//! opening spends its share whatever the authors' ranking would have asked. What it asks beyond
+//! the ceiling's earnings is a debt like any opening's, repaid the same way, so the run's total
+//! is unchanged. It is there to spend the run's budget early: on Lunar Lander the learners that
+//! take off early are those with thousands of answers in their first 15k steps
+//! (`benches/grids/early_answers.py`), while the authors' ranking asks about a thousand there.
+//!
+//! [`QueryRule`]: super::query_rule::QueryRule
+//!
 //! Optionally (`min_feedback_rate`, off by default) the rate follows the answers themselves:
 //! from the floor when the trainer's recent answers were all "good" to the ceiling when they were
 //! all "bad", so a person is asked more while the robot keeps doing wrong and less once it does
@@ -61,6 +72,12 @@ pub struct AskBudget {
     /// then (only for its best-ranked state, as with a last token).
     #[serde(default, skip_serializing_if = "is_nothing")]
     spare: f64,
+    /// The share of the opening's steps it may ask (`None`: all, as the authors' rule asks).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    opening_rate: Option<f64>,
+    /// The paced opening's own bucket: earns `opening_rate` a step, holds at most `burst`.
+    #[serde(default, skip_serializing_if = "is_nothing")]
+    opening_tokens: f64,
 }
 
 pub(super) fn is_zero(n: &u64) -> bool {
@@ -97,6 +114,8 @@ impl AskBudget {
             in_opening: false,
             repay_share: 1.0,
             spare: 0.0,
+            opening_rate: None,
+            opening_tokens: 0.0,
         }
     }
 
@@ -119,6 +138,19 @@ impl AskBudget {
     pub fn opening_for(mut self, steps: u64) -> Self {
         self.opening_left = steps;
         self
+    }
+
+    /// The same bucket, its opening paced: at most `rate` (in (0, 1]) of the opening's steps
+    /// asked, from a bucket of the opening's own that starts empty.
+    pub fn opening_at(mut self, rate: f64) -> Self {
+        self.opening_rate = Some(rate);
+        self
+    }
+
+    /// Whether the step now running is one of a paced opening's: the rule then ranks as a
+    /// woken rule does, so that it spends the opening's share.
+    pub fn in_paced_opening(&self) -> bool {
+        self.in_opening && self.opening_rate.is_some()
     }
 
     /// The same bucket with a rate between `floor` and its ceiling, by the share of "bad"
@@ -157,22 +189,31 @@ impl AskBudget {
         } else {
             self.tokens = (self.tokens + earned).min(self.burst);
         }
+        if let (true, Some(rate)) = (self.in_opening, self.opening_rate) {
+            self.opening_tokens = (self.opening_tokens + rate).min(self.burst);
+        }
     }
 
-    /// Whether a whole query is in the bucket (always, during the opening), or spare while a
-    /// debt is repaid.
+    /// Whether a whole query is in the bucket (always during an unpaced opening; in a paced
+    /// one, in the opening's bucket), or spare while a debt is repaid.
     pub fn can_ask(&self) -> bool {
-        self.in_opening || self.tokens >= 1.0 || self.spare >= 1.0
+        match (self.in_opening, self.opening_rate) {
+            (true, None) => true,
+            (true, Some(_)) => self.opening_tokens >= 1.0,
+            (false, _) => self.tokens >= 1.0 || self.spare >= 1.0,
+        }
     }
 
     /// How many of the `k` states ranked above the best may still ask: all of them with a full
-    /// bucket or during the opening, none (only the best-ranked state) with less than two
-    /// queries' worth.
+    /// bucket or during an unpaced opening, none (only the best-ranked state) with less than
+    /// two queries' worth (in a paced opening, of the opening's bucket).
     pub fn ranks_allowed(&self, k: usize) -> usize {
-        if self.in_opening {
-            return k;
-        }
-        let fill = ((self.tokens - 1.0) / (self.burst - 1.0).max(1.0)).clamp(0.0, 1.0);
+        let held = match (self.in_opening, self.opening_rate) {
+            (true, None) => return k,
+            (true, Some(_)) => self.opening_tokens,
+            (false, _) => self.tokens,
+        };
+        let fill = ((held - 1.0) / (self.burst - 1.0).max(1.0)).clamp(0.0, 1.0);
         (k as f64 * fill).floor() as usize
     }
 
@@ -182,6 +223,9 @@ impl AskBudget {
             self.spare -= 1.0;
         } else {
             self.tokens -= 1.0;
+        }
+        if self.in_paced_opening() {
+            self.opening_tokens -= 1.0;
         }
         if self.floor.is_some() {
             self.recent_bad.push_back(h < 0.0);
@@ -305,6 +349,65 @@ mod tests {
             assert_eq!(before.tokens.to_bits(), whole.tokens.to_bits());
         }
         assert_eq!(before, whole);
+    }
+
+    #[test]
+    fn a_paced_opening_asks_its_share_then_repays_within_the_runs_ceiling() {
+        let mut budget = AskBudget::new(0.1, 20)
+            .opening_for(15_000)
+            .starting_empty()
+            .repaying(0.9)
+            .opening_at(1.0 / 3.0);
+        let (mut asked, mut streak, mut longest) = (0u64, 0u64, 0u64);
+        for _ in 0..15_000 {
+            budget.tick();
+            assert!(budget.in_paced_opening());
+            if budget.can_ask() {
+                budget.spend(1.0);
+                asked += 1;
+                streak += 1;
+                longest = longest.max(streak);
+            } else {
+                streak = 0;
+            }
+        }
+        // A third of the steps from a bucket that starts empty: no flood at all.
+        assert!((4_990..=5_000).contains(&asked), "{asked}");
+        assert_eq!(longest, 1, "one query, then two steps earning the next");
+        // 5,000 asked against 1,500 earned: 3,500 repaid at 0.09 a step (38,889 steps), after
+        // which the run is within 10 % of its steps.
+        assert!((budget.tokens + 3_500.0).abs() < 5.0, "{}", budget.tokens);
+        let after = ask_whenever_allowed(&mut budget, 150_000 - 15_000);
+        assert!(!budget.in_paced_opening());
+        assert!(
+            (14_990..=15_000).contains(&(asked + after)),
+            "{}",
+            asked + after
+        );
+    }
+
+    #[test]
+    fn a_paced_opening_admits_more_ranks_as_its_bucket_fills() {
+        let mut budget = AskBudget::new(0.1, 21).opening_for(1_000).opening_at(0.5);
+        budget.tick();
+        assert!(!budget.can_ask(), "its own bucket starts empty");
+        budget.tick();
+        assert!(budget.can_ask());
+        assert_eq!(
+            budget.ranks_allowed(60),
+            0,
+            "one query: the best state only"
+        );
+        for _ in 0..40 {
+            budget.tick();
+        }
+        assert_eq!(budget.ranks_allowed(60), 60, "full: every rank");
+        // Ticks outside the opening leave the opening's bucket alone.
+        let mut done = AskBudget::new(0.1, 20).opening_for(1).opening_at(0.5);
+        done.tick();
+        done.tick();
+        assert!(!done.in_paced_opening());
+        assert_eq!(done.opening_tokens, 0.5);
     }
 
     #[test]

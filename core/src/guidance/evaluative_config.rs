@@ -57,6 +57,10 @@ pub struct FeedbackCeiling {
     /// it repays (1, the default: all, silent until repaid; configs before it read as 1).
     #[serde(default = "whole", skip_serializing_if = "is_whole")]
     pub repay_share: f64,
+    /// The share of the opening's steps it may ask, ranked as a woken rule ranks (`None`, the
+    /// default: every step the authors' ranking asks; configs before it read as `None`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub opening_rate: Option<f64>,
 }
 
 impl FeedbackCeiling {
@@ -65,6 +69,9 @@ impl FeedbackCeiling {
         let mut budget = AskBudget::new(self.rate, self.burst)
             .opening_for(self.opening)
             .repaying(self.repay_share);
+        if let Some(rate) = self.opening_rate {
+            budget = budget.opening_at(rate);
+        }
         if self.start_empty {
             budget = budget.starting_empty();
         }
@@ -87,6 +94,7 @@ pub const DEFAULT_CEILING: FeedbackCeiling = FeedbackCeiling {
     opening: 0,
     start_empty: false,
     repay_share: 1.0,
+    opening_rate: None,
 };
 /// The product DREF's silence wake: after 1,000 steps without a query the rule ranks the current
 /// state among the states of that silence, so it cannot freeze, and otherwise ranks as the

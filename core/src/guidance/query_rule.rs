@@ -15,7 +15,9 @@
 //! ([`AskBudget`]); both are off in the authors' rule. A third change keeps the authors' ranking
 //! and only wakes it: after W steps without a query, the current state is ranked among the
 //! states visited during that silence ([`SilenceWake`]), so the rule cannot stay silent while
-//! the learner is somewhere else than where its best-ranked states are.
+//! the learner is somewhere else than where its best-ranked states are. During a paced opening
+//! ([`AskBudget::opening_at`]) the rule ranks as if woken from the start, among the states of
+//! its last `wake_after` steps.
 
 use std::collections::BTreeMap;
 
@@ -173,9 +175,12 @@ impl QueryRule {
         };
         let own = self.score(g);
         let higher_than = |other: &AbstractState| self.score(*other) > own;
+        // A paced opening must spend its share: ranked as the authors rank, Lunar Lander's rule
+        // asks about a thousand of its first 15k steps whatever the bucket holds.
+        let paced = self.budget.as_ref().is_some_and(|b| b.in_paced_opening());
         match (&self.recent, &self.wake) {
             (Some(recent), _) => count_at_most(recent.states().filter(higher_than), k),
-            (None, Some(wake)) if wake.awake() => {
+            (None, Some(wake)) if wake.awake() || paced => {
                 count_at_most(wake.during.states().filter(higher_than), k)
             }
             (None, _) => count_at_most(self.stats.keys().filter(|o| higher_than(o)), k),

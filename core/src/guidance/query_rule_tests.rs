@@ -191,6 +191,40 @@ fn a_waking_rule_keeps_the_authors_ranking_until_a_silence_and_then_asks_once() 
 }
 
 #[test]
+fn a_paced_opening_ranks_as_if_woken_and_asks_its_share_of_a_frozen_history() {
+    // The frozen history silences the authors' ranking; with a paced opening of 3,000 steps at
+    // a quarter of them the rule asks from the first steps, every fourth step at most.
+    let budget = AskBudget::new(0.1, 20)
+        .opening_for(3_000)
+        .starting_empty()
+        .opening_at(0.25);
+    let mut rule = QueryRule::new(0.1, 2, UcbForm::Authors)
+        .waking_after(1_000)
+        .with_ceiling(budget);
+    let now = frozen_history(&mut rule);
+    let mut asked_at = Vec::new();
+    for step in 1..=3_000u64 {
+        if rule.visit(now) {
+            rule.record(now, 1.0, 1.0);
+            asked_at.push(step);
+        }
+    }
+    assert_eq!(asked_at.len(), 750);
+    assert_eq!(asked_at[..3], [4, 8, 12]);
+    // After the opening, the debt (750 asked, 300 earned) silences it as any opening's: the
+    // authors' ranking again, and no token for the wake to spend.
+    assert!((3_001..=5_000u64).all(|_| !rule.visit(now)));
+    // Without the pacing the same opening asks nothing: the authors' ranking is frozen.
+    let open = AskBudget::new(0.1, 20).opening_for(3_000).starting_empty();
+    let mut authors = QueryRule::new(0.1, 2, UcbForm::Authors)
+        .waking_after(1_000)
+        .with_ceiling(open);
+    let now = frozen_history(&mut authors);
+    let asked = (1..=999).filter(|_| authors.visit(now)).count();
+    assert_eq!(asked, 0);
+}
+
+#[test]
 fn a_waking_rule_asks_the_best_state_of_the_silence() {
     let (good, bad) = (AbstractState(20), AbstractState(21));
     let mut rule = QueryRule::new(0.1, 0, UcbForm::Authors).waking_after(10);
