@@ -108,11 +108,12 @@ impl SessionPlan {
     }
 }
 
-/// The algorithm's configuration, built from the spec.
+/// The algorithm's configuration, built from the spec. Both are boxed: they differ in size by
+/// about 200 bytes, which grows with every setting, and a plan is built once a session.
 #[derive(Clone, Debug)]
 pub enum RunConfig {
-    Evaluative(EvaluativeRunConfig),
-    Preference(PreferenceRunConfig),
+    Evaluative(Box<EvaluativeRunConfig>),
+    Preference(Box<PreferenceRunConfig>),
 }
 
 impl RunConfig {
@@ -138,12 +139,12 @@ impl SessionSpec {
         let (task, graph, max_steps) = match (self.task, declared) {
             (Some(task), _) => {
                 return Ok(match self.method {
-                    SessionMethod::Evaluative(method) => RunConfig::Evaluative(
+                    SessionMethod::Evaluative(method) => RunConfig::Evaluative(Box::new(
                         self.paced_for_people(self.params.evaluative(task, method, self.seed)?)?,
-                    ),
-                    SessionMethod::Preference(method) => {
-                        RunConfig::Preference(self.params.preference(task, method, self.seed)?)
-                    }
+                    )),
+                    SessionMethod::Preference(method) => RunConfig::Preference(Box::new(
+                        self.params.preference(task, method, self.seed)?,
+                    )),
                 });
             }
             (None, Some(d)) => (
@@ -154,15 +155,15 @@ impl SessionSpec {
             (None, None) => (DeclaredTask::default(), SceneGraph::Declared(&[]), 1000),
         };
         Ok(match self.method {
-            SessionMethod::Evaluative(method) => {
-                RunConfig::Evaluative(self.paced_for_people(self.params.apply_evaluative(
+            SessionMethod::Evaluative(method) => RunConfig::Evaluative(Box::new(
+                self.paced_for_people(self.params.apply_evaluative(
                     EvaluativeRunConfig::declared(task, graph, method, self.seed),
-                )?)?)
-            }
+                )?)?,
+            )),
             SessionMethod::Preference(method) => {
-                RunConfig::Preference(self.params.apply_preference(
+                RunConfig::Preference(Box::new(self.params.apply_preference(
                     PreferenceRunConfig::declared(task, graph, method, self.seed, max_steps),
-                )?)
+                )?))
             }
         })
     }

@@ -85,9 +85,11 @@ fn run(plan: SessionPlan, mut ctx: SessionContext) -> Result<Ending, SessionErro
     } = plan;
     match run {
         RunConfig::Evaluative(config) => {
-            evaluative_loop::run(&spec, settings, config, remote, ctx, observer)
+            evaluative_loop::run(&spec, settings, *config, remote, ctx, observer)
         }
-        RunConfig::Preference(config) => preference_loop::run(&spec, config, remote, ctx, observer),
+        RunConfig::Preference(config) => {
+            preference_loop::run(&spec, *config, remote, ctx, observer)
+        }
     }
 }
 

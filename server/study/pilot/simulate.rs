@@ -104,8 +104,8 @@ pub fn run_all(
 /// One session, headless, with the synthetic teacher.
 pub fn run_one(run: &PilotRun, experts: &Experts) -> Result<Score, String> {
     match &run.config {
-        RunConfig::Evaluative(config) => evaluative(config.clone(), run.budget, experts),
-        RunConfig::Preference(config) => Ok(preference(config.clone(), run.budget)),
+        RunConfig::Evaluative(config) => evaluative((**config).clone(), run.budget, experts),
+        RunConfig::Preference(config) => Ok(preference((**config).clone(), run.budget)),
     }
 }
 
