@@ -253,6 +253,21 @@ mod tests {
         asked
     }
 
+    /// As [`ask_whenever_allowed`], with the longest stretch of consecutive asked steps.
+    fn ask_whenever_allowed_streaks(budget: &mut AskBudget, steps: u64) -> (u64, u64) {
+        let (mut asked, mut streak, mut longest) = (0, 0, 0);
+        for _ in 0..steps {
+            if ask_whenever_allowed(budget, 1) == 1 {
+                asked += 1;
+                streak += 1;
+                longest = longest.max(streak);
+            } else {
+                streak = 0;
+            }
+        }
+        (asked, longest)
+    }
+
     #[test]
     fn an_opening_asks_on_every_step_then_repays_before_asking_again() {
         let mut budget = AskBudget::new(0.1, 20).opening_for(2_000);
@@ -358,19 +373,8 @@ mod tests {
             .starting_empty()
             .repaying(0.9)
             .opening_at(1.0 / 3.0);
-        let (mut asked, mut streak, mut longest) = (0u64, 0u64, 0u64);
-        for _ in 0..15_000 {
-            budget.tick();
-            assert!(budget.in_paced_opening());
-            if budget.can_ask() {
-                budget.spend(1.0);
-                asked += 1;
-                streak += 1;
-                longest = longest.max(streak);
-            } else {
-                streak = 0;
-            }
-        }
+        let (asked, longest) = ask_whenever_allowed_streaks(&mut budget, 15_000);
+        assert!(budget.in_paced_opening(), "its last step");
         // A third of the steps from a bucket that starts empty: no flood at all.
         assert!((4_990..=5_000).contains(&asked), "{asked}");
         assert_eq!(longest, 1, "one query, then two steps earning the next");
@@ -430,18 +434,7 @@ mod tests {
     #[test]
     fn asks_at_most_its_rate_and_its_burst_in_a_row() {
         let mut budget = AskBudget::new(0.05, 20);
-        let (mut asked, mut streak, mut longest) = (0u32, 0u32, 0u32);
-        for _ in 0..100_000 {
-            budget.tick();
-            if budget.can_ask() {
-                budget.spend(1.0);
-                asked += 1;
-                streak += 1;
-                longest = longest.max(streak);
-            } else {
-                streak = 0;
-            }
-        }
+        let (asked, longest) = ask_whenever_allowed_streaks(&mut budget, 100_000);
         // A greedy asker gets the full bucket, then one query every 20 steps.
         assert!((5_000..=5_020).contains(&asked), "asked {asked}");
         assert!((20..=22).contains(&longest), "longest streak {longest}");
