@@ -219,9 +219,22 @@ fn the_ceiling<'a>(
 
 #[cfg(test)]
 mod tests {
+    use crate::guidance::evaluative_run::FeedbackCeiling;
     use crate::guidance::feedback_schedule::EvaluativeMethod;
     use crate::settings::Settings;
     use crate::sim::Task;
+
+    /// The ceiling `pairs` give `method` on `task`, or the error as a user reads it.
+    fn ceiling(
+        task: Task,
+        pairs: &[(&str, &str)],
+        method: EvaluativeMethod,
+    ) -> Result<Option<FeedbackCeiling>, String> {
+        Settings::from_pairs(pairs.iter().copied())
+            .and_then(|s| s.evaluative(task, method, 0))
+            .map(|c| c.query_rule.ceiling)
+            .map_err(|e| e.to_string())
+    }
 
     #[test]
     fn the_opening_is_a_setting_of_the_ceiling_2000_steps_for_dref() {
@@ -266,12 +279,7 @@ mod tests {
 
     #[test]
     fn the_openings_accounting_is_two_settings_of_the_ceiling_on_for_dref_only() {
-        let rule = |pairs: &[(&str, &str)], method| {
-            Settings::from_pairs(pairs.iter().copied())
-                .and_then(|s| s.evaluative(Task::Reaching, method, 0))
-                .map(|c| c.query_rule.ceiling)
-                .map_err(|e| e.to_string())
-        };
+        let rule = |pairs: &[(&str, &str)], method| ceiling(Task::Reaching, pairs, method);
         let product = rule(&[], EvaluativeMethod::Dref).unwrap().unwrap();
         assert_eq!((product.start_empty, product.repay_share), (true, 0.9));
         let off = rule(
@@ -342,12 +350,7 @@ mod tests {
 
     #[test]
     fn a_paced_opening_needs_an_opening_and_a_share_of_its_steps() {
-        let rule = |pairs: &[(&str, &str)], method| {
-            Settings::from_pairs(pairs.iter().copied())
-                .and_then(|s| s.evaluative(Task::LunarLander, method, 0))
-                .map(|c| c.query_rule.ceiling)
-                .map_err(|e| e.to_string())
-        };
+        let rule = |pairs: &[(&str, &str)], method| ceiling(Task::LunarLander, pairs, method);
         let product = rule(&[], EvaluativeMethod::Dref).unwrap().unwrap();
         assert_eq!(product.opening_rate, None, "off by default");
         let paced = rule(
