@@ -238,6 +238,7 @@ impl AskBudget {
 
 #[cfg(test)]
 mod tests {
+    use super::super::ask_pacing::AskPacing;
     use super::*;
 
     /// Asks on every step it may for `steps` steps, ticking first as the rule does; the count.
@@ -255,17 +256,13 @@ mod tests {
 
     /// As [`ask_whenever_allowed`], with the longest stretch of consecutive asked steps.
     fn ask_whenever_allowed_streaks(budget: &mut AskBudget, steps: u64) -> (u64, u64) {
-        let (mut asked, mut streak, mut longest) = (0, 0, 0);
-        for _ in 0..steps {
-            if ask_whenever_allowed(budget, 1) == 1 {
-                asked += 1;
-                streak += 1;
-                longest = longest.max(streak);
-            } else {
-                streak = 0;
-            }
+        let (mut asked, mut pacing) = (0, AskPacing::default());
+        for step in 0..steps {
+            let ask = ask_whenever_allowed(budget, 1) == 1;
+            pacing.step(step, ask);
+            asked += u64::from(ask);
         }
-        (asked, longest)
+        (asked, pacing.longest_flood)
     }
 
     #[test]

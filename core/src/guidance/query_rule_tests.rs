@@ -1,6 +1,7 @@
 //! Tests of the query rule (`query_rule.rs`): the authors' ranking, the product's window and
 //! ceiling, the silence wake, and their checkpoints.
 
+use super::super::ask_pacing::AskPacing;
 use super::*;
 
 const A: AbstractState = AbstractState(0b01);
@@ -281,19 +282,17 @@ fn a_ceiling_bounds_the_flood_of_the_first_states() {
         .ranked_among_recent(1_000)
         .with_ceiling(AskBudget::new(0.05, 20));
     let run = |rule: &mut QueryRule| {
-        let (mut asked, mut streak, mut longest) = (0u32, 0u32, 0u32);
-        for step in 0..20_000u32 {
+        let (mut asked, mut pacing) = (0u64, AskPacing::default());
+        for step in 0..20_000u64 {
             let g = if step % 7 < 4 { a } else { b };
-            if rule.visit(g) {
+            let ask = rule.visit(g);
+            if ask {
                 rule.record(g, 1.0, 0.5);
-                asked += 1;
-                streak += 1;
-                longest = longest.max(streak);
-            } else {
-                streak = 0;
             }
+            pacing.step(step, ask);
+            asked += u64::from(ask);
         }
-        (asked, longest)
+        (asked, pacing.longest_flood)
     };
     assert_eq!(run(&mut authors), (20_000, 20_000));
     let (asked, longest) = run(&mut capped);
