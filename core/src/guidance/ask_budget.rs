@@ -72,12 +72,10 @@ pub struct AskBudget {
     /// then (only for its best-ranked state, as with a last token).
     #[serde(default, skip_serializing_if = "is_nothing")]
     spare: f64,
-    /// The share of the opening's steps it may ask (`None`: all, as the authors' rule asks).
+    /// A paced opening's own bucket, a plain one at the opening's rate (`None`: the opening
+    /// asks on every step the ranking asks, as the authors' rule does).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    opening_rate: Option<f64>,
-    /// The paced opening's own bucket: earns `opening_rate` a step, holds at most `burst`.
-    #[serde(default, skip_serializing_if = "is_nothing")]
-    opening_tokens: f64,
+    opening_bucket: Option<Box<AskBudget>>,
 }
 
 pub(super) fn is_zero(n: &u64) -> bool {
@@ -114,8 +112,7 @@ impl AskBudget {
             in_opening: false,
             repay_share: 1.0,
             spare: 0.0,
-            opening_rate: None,
-            opening_tokens: 0.0,
+            opening_bucket: None,
         }
     }
 
@@ -143,14 +140,15 @@ impl AskBudget {
     /// The same bucket, its opening paced: at most `rate` (in (0, 1]) of the opening's steps
     /// asked, from a bucket of the opening's own that starts empty.
     pub fn opening_at(mut self, rate: f64) -> Self {
-        self.opening_rate = Some(rate);
+        let burst = self.burst as u32;
+        self.opening_bucket = Some(Box::new(AskBudget::new(rate, burst).starting_empty()));
         self
     }
 
     /// Whether the step now running is one of a paced opening's: the rule then ranks as a
     /// woken rule does, so that it spends the opening's share.
     pub fn in_paced_opening(&self) -> bool {
-        self.in_opening && self.opening_rate.is_some()
+        self.in_opening && self.opening_bucket.is_some()
     }
 
     /// The same bucket with a rate between `floor` and its ceiling, by the share of "bad"
@@ -189,17 +187,17 @@ impl AskBudget {
         } else {
             self.tokens = (self.tokens + earned).min(self.burst);
         }
-        if let (true, Some(rate)) = (self.in_opening, self.opening_rate) {
-            self.opening_tokens = (self.opening_tokens + rate).min(self.burst);
+        if let (true, Some(bucket)) = (self.in_opening, &mut self.opening_bucket) {
+            bucket.tick();
         }
     }
 
     /// Whether a whole query is in the bucket (always during an unpaced opening; in a paced
     /// one, in the opening's bucket), or spare while a debt is repaid.
     pub fn can_ask(&self) -> bool {
-        match (self.in_opening, self.opening_rate) {
+        match (self.in_opening, &self.opening_bucket) {
             (true, None) => true,
-            (true, Some(_)) => self.opening_tokens >= 1.0,
+            (true, Some(bucket)) => bucket.can_ask(),
             (false, _) => self.tokens >= 1.0 || self.spare >= 1.0,
         }
     }
@@ -208,12 +206,12 @@ impl AskBudget {
     /// bucket or during an unpaced opening, none (only the best-ranked state) with less than
     /// two queries' worth (in a paced opening, of the opening's bucket).
     pub fn ranks_allowed(&self, k: usize) -> usize {
-        let held = match (self.in_opening, self.opening_rate) {
+        match (self.in_opening, &self.opening_bucket) {
             (true, None) => return k,
-            (true, Some(_)) => self.opening_tokens,
-            (false, _) => self.tokens,
-        };
-        let fill = ((held - 1.0) / (self.burst - 1.0).max(1.0)).clamp(0.0, 1.0);
+            (true, Some(bucket)) => return bucket.ranks_allowed(k),
+            (false, _) => {}
+        }
+        let fill = ((self.tokens - 1.0) / (self.burst - 1.0).max(1.0)).clamp(0.0, 1.0);
         (k as f64 * fill).floor() as usize
     }
 
@@ -224,8 +222,8 @@ impl AskBudget {
         } else {
             self.tokens -= 1.0;
         }
-        if self.in_paced_opening() {
-            self.opening_tokens -= 1.0;
+        if let (true, Some(bucket)) = (self.in_opening, &mut self.opening_bucket) {
+            bucket.spend(h);
         }
         if self.floor.is_some() {
             self.recent_bad.push_back(h < 0.0);
@@ -408,7 +406,7 @@ mod tests {
         done.tick();
         done.tick();
         assert!(!done.in_paced_opening());
-        assert_eq!(done.opening_tokens, 0.5);
+        assert_eq!(done.opening_bucket.map(|b| b.tokens), Some(0.5));
     }
 
     #[test]
