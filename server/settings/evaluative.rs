@@ -1,5 +1,5 @@
 //! What every evaluative run takes besides its learner's and its rule's settings: the scale of
-//! the reward the learner stores, and a person's pace.
+//! the reward the learner stores, a person's pace, and the step its questions stop at.
 
 use serde::{Deserialize, Serialize};
 
@@ -9,7 +9,7 @@ use super::session::SessionSection;
 use crate::guidance::evaluative_run::EvaluativeRunConfig;
 use crate::guidance::human_pace::HumanPace;
 
-/// The reward's scale and a person's pace.
+/// The reward's scale, a person's pace and the step the questions stop at.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(default)]
 pub struct EvaluativeSection {
@@ -20,6 +20,10 @@ pub struct EvaluativeSection {
     /// the paper's behaviour) [default 0].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_queries_per_minute: Option<u32>,
+    /// No query from this step on (0: the method asks to the run's end, as the paper's do): a
+    /// probe of when answers matter (`docs/dref.md`) [default 0].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub feedback_until: Option<u64>,
 }
 
 impl EvaluativeSection {
@@ -27,6 +31,7 @@ impl EvaluativeSection {
         Self {
             reward_scale: Some(config.reward_scale),
             max_queries_per_minute: Some(0),
+            feedback_until: Some(config.feedback_until.unwrap_or(0)),
         }
     }
 
@@ -41,6 +46,9 @@ impl EvaluativeSection {
         if let Some(n) = self.max_queries_per_minute.filter(|n| *n > 0) {
             let pace_hz = session.resolve()?.pace_hz;
             config.human_pace = Some(HumanPace::new(n, pace_hz));
+        }
+        if let Some(n) = self.feedback_until {
+            config.feedback_until = (n > 0).then_some(n);
         }
         Ok(())
     }

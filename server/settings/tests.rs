@@ -384,6 +384,33 @@ fn teacher_faults_and_a_persons_pace_reach_the_runs() {
 }
 
 #[test]
+fn feedback_until_stops_the_questions_of_any_evaluative_run_and_zero_never_does() {
+    let until = |v: serde_json::Value, method: &str| {
+        let s = Settings::from_json(v).unwrap();
+        let m: EvaluativeMethod = method.parse().unwrap();
+        s.evaluative(Task::LunarLander, m, 0)
+            .map(|c| c.feedback_until)
+    };
+    assert_eq!(
+        until(json!({"feedback_until": 15000}), "ef-100"),
+        Ok(Some(15000))
+    );
+    assert_eq!(
+        until(json!({"feedback_until": 15000}), "dref"),
+        Ok(Some(15000))
+    );
+    assert_eq!(until(json!({"feedback_until": 0}), "ef-100"), Ok(None));
+    assert_eq!(until(json!({}), "ef-100"), Ok(None));
+    assert!(Settings::from_json(json!({"feedback_until": -1})).is_err());
+    assert!(Settings::from_json(json!({"feedback_until": "soon"})).is_err());
+    let cut = Settings::from_json(json!({"feedback_until": 100})).unwrap();
+    assert!(matches!(
+        cut.preference(Task::Reaching, QueryMethod::Drpl, 0),
+        Err(SettingsError::WrongFamily { .. })
+    ));
+}
+
+#[test]
 fn answers_per_query_needs_a_rule_and_the_rule_needs_several_answers() {
     let session = |v: serde_json::Value| Settings::from_json(v).unwrap().session();
     let s = session(json!({"answers_per_query": 3, "combine": "mean"})).unwrap();

@@ -195,6 +195,11 @@ pub struct EvaluativeRunConfig {
     /// At most N queries a minute (people); `None`: the method asks as it likes (the paper).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub human_pace: Option<HumanPace>,
+    /// No query from this step on (`None`: the method asks to the run's end, as the paper's
+    /// do). A probe of when answers matter: EF-100 until a tenth of the steps spends a 10 %
+    /// budget as densely and as early as any rule could.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub feedback_until: Option<u64>,
     /// The synthetic teacher's faults (none: the paper's oracle).
     #[serde(default, skip_serializing_if = "TeacherFaults::is_perfect")]
     pub teacher: TeacherFaults,
@@ -297,6 +302,7 @@ impl EvaluativeRunConfig {
             env: EnvOptions::default(),
             reward_scale: 1.0,
             human_pace: None,
+            feedback_until: None,
             teacher: TeacherFaults::default(),
             oracle: OracleConfig::default(),
             graph_at_episode_end: GraphAtEpisodeEnd::Step,
@@ -340,6 +346,7 @@ impl EvaluativeRunConfig {
             env: EnvOptions::default(),
             reward_scale: 1.0,
             human_pace: None,
+            feedback_until: None,
             teacher: TeacherFaults::default(),
             oracle: OracleConfig::default(),
             graph_at_episode_end: GraphAtEpisodeEnd::Step,

@@ -268,12 +268,13 @@ impl EvaluativeRun {
             .scene_graph
             .after_step(self.env.as_ref(), graph_obs, &self.action);
 
-        // The schedule decides first (EF's coin is drawn every step either way); a person's
-        // pace may then hold the query back.
+        // The schedule decides first (EF's coin is drawn every step either way); past
+        // `feedback_until` nothing is asked, and a person's pace may hold the query back.
         let terminated = step.terminated
             || (self.config.time_limit == TimeLimitEnd::Terminal
                 && step.outcome == Some(Outcome::TimeLimit));
-        let wanted = self.schedule.should_ask(g);
+        let wanted = self.schedule.should_ask(g)
+            && self.config.feedback_until.is_none_or(|n| self.steps < n);
         let asks = wanted
             && self
                 .config

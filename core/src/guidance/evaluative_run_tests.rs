@@ -77,6 +77,33 @@ fn a_persons_pace_holds_queries_back_and_leaves_the_rest_alone() {
 }
 
 #[test]
+fn nothing_is_asked_from_feedback_until_on_and_the_learner_goes_on() {
+    let mut front = tiny(Task::Reaching, "ef-100");
+    front.feedback_until = Some(30);
+    let (run, trainer, _) = run(front, 100);
+    assert_eq!((run.feedback_count(), trainer.asked), (30, 30));
+    assert_eq!(trainer.last_step, Some(29), "steps 0-29 asked, none after");
+    assert_eq!(run.learner().updates(), 100);
+    assert_eq!(
+        run.queries_held_back(),
+        0,
+        "a cut-off is not a person's pace"
+    );
+    // EF's coin is drawn on every step either way: EF-50 asks the same steps before the cut.
+    let (whole, _, _) = self::run(tiny(Task::Reaching, "ef-50"), 100);
+    let mut cut = tiny(Task::Reaching, "ef-50");
+    cut.feedback_until = Some(60);
+    let (cut, _, _) = self::run(cut, 100);
+    let before = |r: &EvaluativeRun| r.queried.iter().filter(|(s, _)| *s < 60).count();
+    assert_eq!(before(&cut), before(&whole));
+    assert_eq!(cut.queried.len(), before(&whole));
+    assert!(
+        whole.queried.len() > before(&whole),
+        "EF-50 asks after step 60 uncut"
+    );
+}
+
+#[test]
 fn dref_asks_at_the_first_step_and_counts_every_answer() {
     // While fewer than k + 1 abstract states have feedback, every state ranks in the top
     // k + 1 and DREF asks; which steps it skips later is the query rule's (tested there).
