@@ -284,6 +284,8 @@ impl utoipa::ToSchema for Settings {
 }
 
 #[cfg(test)]
+mod as_run_tests;
+#[cfg(test)]
 mod pinned;
 #[cfg(test)]
 mod product_dref_tests;
