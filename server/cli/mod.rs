@@ -24,6 +24,7 @@ mod sim;
 mod study;
 mod study_server;
 mod train;
+mod train_checkpoint;
 
 use clap::{Parser, Subcommand};
 

@@ -4,22 +4,26 @@
 //!
 //! A long run also keeps `checkpoint.run` (every `--checkpoint-every` steps, at the next
 //! episode's start): a run stopped midway and started again with the same arguments goes on
-//! from there, bit for bit, and the file is removed once `summary.json` is written.
+//! from there, bit for bit, and the file is removed once `summary.json` is written (the
+//! checkpoint, the folder's lock and what a resume keeps: `train_checkpoint.rs`).
 
 use std::fs::{self, File};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 use super::arg_error::ArgError;
-use super::output::{publish_summary, write_atomically};
+use super::output::publish_summary;
 use super::overrides;
 use super::progress::Progress;
 use super::remote::RemoteArgs;
+pub use super::train_checkpoint::CHECKPOINT_FILE;
+use super::train_checkpoint::{
+    Checkpointer, RECENT_EPISODES, ResumeNotes, keep_episodes, keep_kernels_of, lock_run_dir,
+};
 use crate::guidance::evaluative_run::{EpisodeRecord, EvaluativeRun, EvaluativeRunConfig};
 use crate::guidance::evaluative_trainer::EvaluativeTrainer;
 pub use crate::guidance::evaluative_trainer::NoTrainer;
@@ -62,83 +66,6 @@ pub struct TrainArgs {
     #[command(flatten)]
     pub remote: RemoteArgs,
 }
-
-/// The run checkpoint's file name inside OUT.
-pub const CHECKPOINT_FILE: &str = "checkpoint.run";
-
-/// What `train` keeps with a run checkpoint beside the run itself.
-#[derive(Debug, Default, Serialize, Deserialize)]
-struct ResumeNotes {
-    /// The last finished episodes (for the final mean return and success rate).
-    recent_episodes: Vec<EpisodeRecord>,
-    /// Wall time spent on the run before the checkpoint.
-    wall_seconds: f64,
-}
-
-/// Writes the run checkpoint at the first episode start after each multiple of `every` steps
-/// (never if `every` is 0), and keeps the notes that go with it.
-pub struct Checkpointer {
-    path: PathBuf,
-    every: u64,
-    next_at: u64,
-    notes: ResumeNotes,
-    start: Instant,
-}
-
-impl Checkpointer {
-    fn new(path: PathBuf, every: u64, run: &EvaluativeRun, notes: ResumeNotes) -> Self {
-        Self {
-            path,
-            every,
-            next_at: next_multiple(run.steps(), every),
-            notes,
-            start: Instant::now(),
-        }
-    }
-
-    fn wall_seconds(&self) -> f64 {
-        self.notes.wall_seconds + self.start.elapsed().as_secs_f64()
-    }
-
-    fn record(&mut self, episode: &EpisodeRecord) {
-        let recent = &mut self.notes.recent_episodes;
-        recent.push(episode.clone());
-        let excess = recent.len().saturating_sub(RECENT_EPISODES);
-        recent.drain(..excess);
-    }
-
-    /// Save if the run is at an episode start past the next multiple of `every`.
-    fn maybe_save(
-        &mut self,
-        run: &EvaluativeRun,
-        trainer: &dyn EvaluativeTrainer,
-    ) -> anyhow::Result<()> {
-        if self.every == 0 || run.steps() < self.next_at || !run.at_episode_start() {
-            return Ok(());
-        }
-        let notes = ResumeNotes {
-            recent_episodes: self.notes.recent_episodes.clone(),
-            wall_seconds: self.wall_seconds(),
-        };
-        write_atomically(
-            &self.path,
-            &run.checkpoint(trainer, serde_json::to_value(notes)?),
-        )?;
-        self.next_at = next_multiple(run.steps(), self.every);
-        Ok(())
-    }
-}
-
-/// The first multiple of `every` above `step` (`u64::MAX` when `every` is 0).
-fn next_multiple(step: u64, every: u64) -> u64 {
-    match every {
-        0 => u64::MAX,
-        _ => (step / every + 1) * every,
-    }
-}
-
-/// Episodes behind `final_mean_return` and `final_success_rate`.
-const RECENT_EPISODES: usize = 10;
 
 fn parse_oracle_rule(s: &str) -> Result<OracleRule, ArgError> {
     match s {
@@ -403,7 +330,7 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
     )?;
     let wall_seconds = checkpointer.wall_seconds();
     let (final_mean_return, final_success_rate) =
-        final_performance(&checkpointer.notes.recent_episodes, RECENT_EPISODES);
+        final_performance(checkpointer.recent_episodes(), RECENT_EPISODES);
     let summary = TrainSummary {
         task: task_id,
         env_url: args.remote.env_url.clone(),
@@ -432,73 +359,4 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
         }
         _ => Ok(()),
     }
-}
-
-/// A run goes on with kernels of the numerics it began with, so that it stays bit for bit what
-/// an uninterrupted run would have been: AVX-512 and AVX2 stand in for each other, the
-/// portable path only for itself.
-fn keep_kernels_of(bytes: &[u8], path: &Path, label: &str) -> anyhow::Result<()> {
-    let began = EvaluativeRun::checkpoint_kernels(bytes).with_context(|| {
-        format!(
-            "reading {} (delete it to start the run over)",
-            path.display()
-        )
-    })?;
-    let now = kernels::current_path();
-    if began.numerics() == now.numerics() {
-        return Ok(());
-    }
-    let Some(same) = began.available_equivalent() else {
-        anyhow::bail!(
-            "{} was computed with the {began} kernels, which this CPU cannot run; delete it to start \
-             the run over",
-            path.display()
-        );
-    };
-    eprintln!(
-        "{label}: the run began on the {began} kernels and goes on with {same} (not {now}), bit for bit"
-    );
-    kernels::set_default_path(same);
-    Ok(())
-}
-
-/// Hold an exclusive lock on the run's folder for as long as the returned handle lives, so
-/// that a second `train` on the same folder (a grid restarted while its old runs still go on,
-/// the same command typed twice) is refused instead of interleaving its rows with the first's
-/// and overwriting its checkpoint. The lock is the folder's own (flock), so no file is left
-/// behind, and the kernel drops it when the process ends, however it ends. A file system that
-/// cannot lock a folder (some network mounts a cluster's nodes share) gets a warning, not a
-/// refusal: the run goes on unguarded, as before there was a lock.
-fn lock_run_dir(out: &Path) -> anyhow::Result<Option<File>> {
-    let dir = File::open(out).with_context(|| format!("opening {}", out.display()))?;
-    match dir.try_lock() {
-        Ok(()) => Ok(Some(dir)),
-        Err(fs::TryLockError::WouldBlock) => anyhow::bail!(
-            "another `dualrep train` is writing {} (stop it, or wait for it to finish; this one \
-             would resume from its checkpoint)",
-            out.display()
-        ),
-        Err(fs::TryLockError::Error(e)) => {
-            eprintln!(
-                "warning: cannot lock {} ({e}); a second `dualrep train` on it would not be refused",
-                out.display()
-            );
-            Ok(None)
-        }
-    }
-}
-
-/// Cut `metrics.csv` back to its header and first `episodes` rows: the rows a run checkpoint
-/// counts (episodes that finished after it are run again and written again).
-fn keep_episodes(path: &Path, episodes: u64) -> anyhow::Result<()> {
-    let text = fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let keep: Vec<&str> = text.lines().take(1 + episodes as usize).collect();
-    if keep.len() != 1 + episodes as usize {
-        anyhow::bail!(
-            "{} has {} episode rows, the checkpoint counts {episodes}",
-            path.display(),
-            keep.len().saturating_sub(1)
-        );
-    }
-    write_atomically(path, format!("{}\n", keep.join("\n")).as_bytes())
 }
