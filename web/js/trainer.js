@@ -12,6 +12,7 @@ import { postJson } from "./api.js";
 import { linePlot } from "./plot.js";
 import { describeAction, drawScene } from "./render.js";
 import { TrainerSocket, socketUrl } from "./socket.js";
+import { buildSurvey } from "./survey.js";
 import { buildStage, onResize } from "./stage.js";
 
 const UNDO_WINDOW_MS = 6000;
@@ -241,40 +242,6 @@ function showProgress(p) {
 
 // ---- the end and the three questions --------------------------------------------------------
 
-function buildSurvey() {
-  for (const fs of document.querySelectorAll("#survey fieldset")) {
-    const scale = fs.querySelector(".scale");
-    const name = fs.dataset.name;
-    const low = Object.assign(document.createElement("span"), { className: "end", textContent: scale.dataset.low });
-    const high = Object.assign(document.createElement("span"), { className: "end", textContent: scale.dataset.high });
-    scale.append(low);
-    for (let v = 1; v <= 5; v += 1) {
-      const label = document.createElement("label");
-      const input = Object.assign(document.createElement("input"), { type: "radio", name, value: String(v), required: true });
-      label.append(input, String(v));
-      scale.append(label);
-    }
-    scale.append(high);
-  }
-  $("survey-form").addEventListener("submit", async (ev) => {
-    ev.preventDefault();
-    const data = new FormData(ev.target);
-    const body = {};
-    for (const fs of document.querySelectorAll("#survey fieldset")) body[fs.dataset.name] = Number(data.get(fs.dataset.name));
-    const result = $("survey-result");
-    result.textContent = "Sending…";
-    try {
-      await postJson(`/api/sessions/${encodeURIComponent(sessionId)}/survey`, body, { token });
-      result.textContent = "Saved. Thank you for teaching the robot!";
-      ev.target.querySelector("button[type=submit]").disabled = true;
-      setState("survey-saved");
-    } catch (e) {
-      result.textContent = `Your answers could not be saved: ${e.message}`;
-      notify(`Your answers could not be saved: ${e.message}`, { kind: "error" });
-    }
-  });
-}
-
 function showEnd(msg) {
   page.ended = true;
   clearQuery();
@@ -472,7 +439,7 @@ function tickExpiry() {
 }
 
 function start() {
-  buildSurvey();
+  buildSurvey({ sessionId, token: () => token, onSaved: () => setState("survey-saved") });
   $("name-form").addEventListener("submit", joinWithName);
   for (const b of document.querySelectorAll(".answer")) {
     b.addEventListener("click", () => {
