@@ -118,6 +118,39 @@ fn an_expert_trains_and_drives_dref_and_ef_runs() {
             last_cumulative = num(5);
             last_step = num(0);
         }
+        // The learner's curves: a row per episode at the same step, the means of that
+        // episode's updates (one a step from the first); the human critic's loss is 0 without
+        // one (SAC), and a temperature is always positive.
+        let learner = std::fs::read_to_string(d.join(&out_dir).join("learner.csv")).unwrap();
+        let mut rows = learner.lines();
+        assert_eq!(
+            rows.next(),
+            Some("step,episode,updates,critic_loss,actor_loss,human_critic_loss,ent_coef")
+        );
+        let rows: Vec<Vec<f64>> = rows
+            .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
+            .collect();
+        let episodes: Vec<Vec<&str>> = csv
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').collect())
+            .collect();
+        assert_eq!(
+            rows.len(),
+            episodes.len(),
+            "{method}: a learner row per episode"
+        );
+        for (row, episode) in rows.iter().zip(&episodes) {
+            assert_eq!(row[0], episode[0].parse::<f64>().unwrap(), "{method}: step");
+            assert_eq!(
+                row[2],
+                episode[3].parse::<f64>().unwrap(),
+                "{method}: updates"
+            );
+            assert!(row[3..].iter().all(|v| v.is_finite()), "{method}: {row:?}");
+            assert_eq!(row[5] == 0.0, method == "sac", "{method}: {row:?}");
+            assert!(row[6] > 0.0, "{method}: {row:?}");
+        }
     }
 }
 
@@ -252,6 +285,13 @@ fn a_run_killed_midway_resumes_from_its_checkpoint_to_the_same_result() {
     }
     let metrics = |run: &str| std::fs::read_to_string(d.join(run).join("metrics.csv")).unwrap();
     assert_eq!(metrics("killed"), metrics("straight"));
+    // The learner's curves too: a row per episode, the same means bit for bit.
+    let learner = |run: &str| std::fs::read_to_string(d.join(run).join("learner.csv")).unwrap();
+    assert_eq!(learner("killed"), learner("straight"));
+    assert_eq!(
+        learner("straight").lines().count(),
+        metrics("straight").lines().count()
+    );
     assert!(
         !checkpoint.exists(),
         "a finished run removes its checkpoint"

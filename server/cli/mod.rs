@@ -9,6 +9,7 @@ mod compute;
 mod expert;
 mod export;
 mod grid_executor;
+mod learner_log;
 mod loadtest;
 mod output;
 pub(crate) mod overrides;

@@ -16,6 +16,7 @@ use clap::Args;
 use serde::Serialize;
 
 use super::arg_error::ArgError;
+use super::learner_log::{LearnerLog, keep_learner_rows};
 use super::output::publish_summary;
 use super::overrides;
 use super::progress::Progress;
@@ -161,8 +162,9 @@ fn find_expert(explicit: Option<&Path>, task: &str, builtin: Option<Task>) -> an
     }
 }
 
-/// Run `run` to `steps`, writing finished episodes to `metrics.csv` in `out` (a new file, or
-/// appended to the one an earlier call began when `append`).
+/// Run `run` to `steps`, writing finished episodes to `metrics.csv` and the learner's means
+/// over each to `learner.csv` in `out` (new files, or appended to those an earlier call began
+/// when `append`).
 pub fn drive(
     run: &mut EvaluativeRun,
     trainer: &mut dyn EvaluativeTrainer,
@@ -186,13 +188,18 @@ pub fn drive(
              states_with_feedback,steps_since_query,longest_flood"
         )?;
     }
+    let mut learner_log = LearnerLog::open(out, append)?;
     let mut episodes = Vec::new();
     let mut progress = Progress::new(steps, label);
     while run.steps() < steps {
         let report = run
             .try_step(trainer)
             .with_context(|| format!("{label}: at step {}", run.steps()))?;
+        if let Some(stats) = &report.update {
+            learner_log.update(stats);
+        }
         if let Some(e) = report.episode {
+            learner_log.episode_end(e.step, e.episode)?;
             writeln!(
                 csv,
                 "{},{},{},{},{},{},{},{},{},{},{}",
@@ -299,6 +306,7 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
             let notes: ResumeNotes = serde_json::from_value(notes)
                 .with_context(|| format!("reading the notes in {}", checkpoint_path.display()))?;
             keep_episodes(&args.out.join("metrics.csv"), run.episodes())?;
+            keep_learner_rows(&args.out, run.episodes())?;
             eprintln!(
                 "{label}: resumed from {CHECKPOINT_FILE} at step {}",
                 run.steps()
