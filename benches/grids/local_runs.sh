@@ -35,7 +35,7 @@ one() {
   if [ $rc -eq 0 ] && [ -e "$scratch/$dir/summary.json" ]; then
     mkdir -p "$results/$dir"
     cp "$scratch/$dir/config.json" "$scratch/$dir/metrics.csv" "$results/$dir/"
-    # The learner's curves, where the binary writes them (7d2c or later).
+    # The learner's curves, where the binary writes them (7b894c2c or later).
     [ -e "$scratch/$dir/learner.csv" ] && cp "$scratch/$dir/learner.csv" "$results/$dir/"
     # summary.json last: its presence marks the run finished.
     cp "$scratch/$dir/summary.json" "$results/$dir/"
