@@ -2,7 +2,9 @@
 //! (the means of that episode's updates), so a run whose returns collapse can be read against
 //! its critic's loss, its actor's objective and its temperature at the same step. A row per
 //! episode keeps it aligned with `metrics.csv` and exact across a resume: a run checkpoint is
-//! taken at an episode's start, so no episode's updates are split by it.
+//! taken at an episode's start, so no episode's updates are split by it. (`expert`'s periodic
+//! checks stop a drive mid-episode; that episode's row then averages the updates after the
+//! check only, and its `updates` column says how many.)
 
 use std::fs::{self, File};
 use std::io::{BufWriter, Write};
