@@ -7,7 +7,8 @@ a rolling 10 episodes (8 of 10 succeed; on Lunar Lander their mean return is 200
         [--bin 15000]
 
 A folder holds `seed<N>/` runs (metrics.csv: one row per episode with its end step, return,
-outcome and the run's feedback count so far). A cumulative reward says how much a run earned;
+outcome and the run's feedback count so far; learner.csv, where the run has one: the means of
+each episode's updates, binned the same way). A cumulative reward says how much a run earned;
 this says when: a run that learns late earns little even if it ends learnt.
 """
 
@@ -51,6 +52,29 @@ def binned(rows: list[dict[str, str]], width: int) -> list[tuple[float | None, i
     return out
 
 
+def learner_rows(run: Path) -> list[dict[str, str]]:
+    """The run's learner.csv (binaries of 7b894c2c or later), or nothing."""
+    path = run / "learner.csv"
+    if not path.exists():
+        return []
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def binned_learner(rows: list[dict[str, str]], column: str, width: int) -> list[float | None]:
+    """Per stretch of `width` steps: the mean of `column` over the updates of the episodes that
+    ended in it (each episode's mean weighted by its updates)."""
+    end = int(rows[-1]["step"])
+    out: list[float | None] = []
+    for start in range(0, end, width):
+        inside = [r for r in rows if start < int(r["step"]) <= start + width and r[column] != ""]
+        updates = sum(int(r["updates"]) for r in inside)
+        out.append(
+            sum(float(r[column]) * int(r["updates"]) for r in inside) / updates if updates else None
+        )
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("folder", type=Path)
@@ -69,6 +93,13 @@ def main() -> None:
         print(f"{run.name}: first learnt at {'never' if at is None else f'{at} steps'}")
         print(f"  mean return a {args.bin}-step stretch: {returns}")
         print(f"  queries asked in it:                 {asked}")
+        learner = learner_rows(run)
+        if learner:
+            for column in ("critic_loss", "actor_loss", "human_critic_loss", "ent_coef"):
+                means = " ".join(
+                    "   -  " if m is None else f"{m:6.3g}" for m in binned_learner(learner, column, args.bin)
+                )
+                print(f"  {column + ', its mean:':<36} {means}")
 
 
 if __name__ == "__main__":
