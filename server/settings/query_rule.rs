@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::SettingsError;
 use crate::guidance::evaluative_run::{DEFAULT_CEILING, FeedbackCeiling, QueryRuleConfig};
 use crate::guidance::query_rule::UcbForm;
+use crate::guidance::visit_share::OpeningPlacement;
 
 /// DREF's query rule.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
@@ -52,6 +53,11 @@ pub struct QueryRuleSection {
     /// the authors' ranking asks [default 0].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub opening_rate: Option<f64>,
+    /// With a paced opening: where it asks, `ranked` (as a woken rule ranks) or `by_visits`
+    /// (each abstract state asked `opening_rate` of its own visits, so the answers follow where
+    /// the learner is) [default `ranked`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub opening_placement: Option<OpeningPlacement>,
     /// With a ceiling: let the rate run from this floor (recent answers all "good") up to
     /// `max_feedback_rate` (all "bad"); 0: a fixed rate [default 0].
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -77,6 +83,10 @@ impl QueryRuleSection {
             feedback_start_empty: Some(rule.ceiling.is_some_and(|x| x.start_empty)),
             opening_repay_share: Some(rule.ceiling.map_or(1.0, |x| x.repay_share)),
             opening_rate: Some(rule.ceiling.and_then(|x| x.opening_rate).unwrap_or(0.0)),
+            opening_placement: Some(
+                rule.ceiling
+                    .map_or_else(Default::default, |x| x.opening_placement),
+            ),
             min_feedback_rate: Some(rule.ceiling.and_then(|x| x.floor).unwrap_or(0.0)),
             wake_after: Some(rule.wake_after),
         }
@@ -196,6 +206,18 @@ impl QueryRuleSection {
                 c.opening_rate = (rate > 0.0).then_some(rate);
             }
         }
+        if let Some(placement) = self.opening_placement {
+            let ranked = placement == OpeningPlacement::Ranked;
+            if let Some(c) = the_ceiling(rule, "opening_placement", ranked)? {
+                if !ranked && c.opening_rate.is_none() {
+                    return Err(SettingsError::bad(
+                        "opening_placement",
+                        "only a paced opening places its questions; set opening_rate too",
+                    ));
+                }
+                c.opening_placement = placement;
+            }
+        }
         Ok(())
     }
 }
@@ -221,6 +243,7 @@ fn the_ceiling<'a>(
 mod tests {
     use crate::guidance::evaluative_run::FeedbackCeiling;
     use crate::guidance::feedback_schedule::EvaluativeMethod;
+    use crate::guidance::visit_share::OpeningPlacement;
     use crate::settings::Settings;
     use crate::sim::Task;
 
@@ -390,6 +413,48 @@ mod tests {
         ] {
             let e = rule(&pairs, method).unwrap_err();
             assert!(e.contains("opening_rate") && e.contains(words), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_placement_by_visits_needs_a_paced_opening() {
+        let rule = |pairs: &[(&str, &str)], method| ceiling(Task::LunarLander, pairs, method);
+        let product = rule(&[], EvaluativeMethod::Dref).unwrap().unwrap();
+        assert_eq!(product.opening_placement, OpeningPlacement::Ranked);
+        let paced = [
+            ("feedback_opening", "30000"),
+            ("opening_rate", "0.45"),
+            ("opening_placement", "by_visits"),
+        ];
+        let paced = rule(&paced, EvaluativeMethod::Dref).unwrap().unwrap();
+        assert_eq!(paced.opening_placement, OpeningPlacement::ByVisits);
+        assert_eq!(
+            rule(
+                &[("opening_placement", "ranked")],
+                EvaluativeMethod::DrefAuthors
+            ),
+            Ok(None),
+            "its off value on a rule without a ceiling"
+        );
+        for (pairs, method, words) in [
+            (
+                vec![("opening_placement", "by_visits")],
+                EvaluativeMethod::Dref,
+                "set opening_rate",
+            ),
+            (
+                vec![("opening_placement", "by_visits")],
+                EvaluativeMethod::DrefAuthors,
+                "no ceiling",
+            ),
+            (
+                vec![("opening_placement", "at_random")],
+                EvaluativeMethod::Dref,
+                "by_visits",
+            ),
+        ] {
+            let e = rule(&pairs, method).unwrap_err();
+            assert!(e.contains("opening_placement") && e.contains(words), "{e}");
         }
     }
 }

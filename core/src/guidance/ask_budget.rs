@@ -151,6 +151,15 @@ impl AskBudget {
         self.in_opening && self.opening_bucket.is_some()
     }
 
+    /// The share of its steps a paced opening may ask, while the step now running is one of
+    /// its steps (`None` otherwise).
+    pub fn opening_rate_now(&self) -> Option<f64> {
+        match (self.in_opening, &self.opening_bucket) {
+            (true, Some(bucket)) => Some(bucket.rate),
+            _ => None,
+        }
+    }
+
     /// The same bucket with a rate between `floor` and its ceiling, by the share of "bad"
     /// answers among the last [`RATE_ANSWERS`] (the ceiling before any answer).
     pub fn following_answers(mut self, floor: f64) -> Self {

@@ -12,6 +12,7 @@ use super::feedback_schedule::EvaluativeMethod;
 use super::human_pace::HumanPace;
 use super::query_rule::{QueryRule, UcbForm};
 use super::teacher::TeacherFaults;
+use super::visit_share::OpeningPlacement;
 use crate::rl::{ActorMix, HumanCriticConfig, SacConfig};
 use crate::scene_graph::SceneGraph;
 use crate::sim::{DeclaredTask, Env, EnvOptions, Task, TaskRef};
@@ -61,6 +62,14 @@ pub struct FeedbackCeiling {
     /// default: every step the authors' ranking asks; configs before it read as `None`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub opening_rate: Option<f64>,
+    /// Where a paced opening asks: ranked (the default; configs before it read so), or each
+    /// abstract state its share of its own visits.
+    #[serde(default, skip_serializing_if = "is_ranked")]
+    pub opening_placement: OpeningPlacement,
+}
+
+fn is_ranked(placement: &OpeningPlacement) -> bool {
+    *placement == OpeningPlacement::Ranked
 }
 
 impl FeedbackCeiling {
@@ -95,6 +104,7 @@ pub const DEFAULT_CEILING: FeedbackCeiling = FeedbackCeiling {
     start_empty: false,
     repay_share: 1.0,
     opening_rate: None,
+    opening_placement: OpeningPlacement::Ranked,
 };
 /// The product DREF's silence wake: after 1,000 steps without a query the rule ranks the current
 /// state among the states of that silence, so it cannot freeze, and otherwise ranks as the
@@ -161,6 +171,9 @@ impl QueryRuleConfig {
         }
         if let Some(ceiling) = self.ceiling {
             rule = rule.with_ceiling(ceiling.budget());
+            if ceiling.opening_placement == OpeningPlacement::ByVisits {
+                rule = rule.opening_by_visits();
+            }
         }
         if self.wake_after > 0 {
             rule = rule.waking_after(self.wake_after);

@@ -17,7 +17,7 @@
 //! states visited during that silence ([`SilenceWake`]), so the rule cannot stay silent while
 //! the learner is somewhere else than where its best-ranked states are. During a paced opening
 //! ([`AskBudget::opening_at`]) the rule ranks as if woken from the start, among the states of
-//! its last `wake_after` steps.
+//! its last `wake_after` steps, or asks each state its share of its own visits ([`VisitShare`]).
 
 use std::collections::BTreeMap;
 
@@ -25,6 +25,7 @@ use serde::{Deserialize, Serialize};
 
 use super::ask_budget::AskBudget;
 use super::recent_visits::RecentVisits;
+use super::visit_share::VisitShare;
 use crate::scene_graph::AbstractState;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -68,6 +69,10 @@ pub struct QueryRule {
     /// Boxed: most rules have none, and the schedule that holds a rule stays small.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     wake: Option<Box<SilenceWake>>,
+    /// A paced opening's visits and questions per state, when it asks each state its share of
+    /// its visits instead of by rank (`None`: by rank).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    opening_share: Option<Box<VisitShare>>,
 }
 
 /// The steps since the rule last asked, and the states visited in the last `after` of them:
@@ -109,6 +114,7 @@ impl QueryRule {
             recent: None,
             budget: None,
             wake: None,
+            opening_share: None,
         }
     }
 
@@ -116,6 +122,13 @@ impl QueryRule {
     /// the next query (the authors' ranking otherwise).
     pub fn waking_after(mut self, steps: u64) -> Self {
         self.wake = Some(Box::new(SilenceWake::new(steps)));
+        self
+    }
+
+    /// In a paced opening, ask each state the opening's rate of its own visits rather than by
+    /// rank ([`VisitShare`]); after the opening the rule ranks as before.
+    pub fn opening_by_visits(mut self) -> Self {
+        self.opening_share = Some(Box::default());
         self
     }
 
@@ -173,11 +186,15 @@ impl QueryRule {
             Some(budget) if budget.can_ask() => budget.ranks_allowed(self.k),
             Some(_) => return false,
         };
-        let own = self.score(g);
-        let higher_than = |other: &AbstractState| self.score(*other) > own;
         // A paced opening must spend its share: ranked as the authors rank, Lunar Lander's rule
         // asks about a thousand of its first 15k steps whatever the bucket holds.
-        let paced = self.budget.as_ref().is_some_and(|b| b.in_paced_opening());
+        let paced = self.budget.as_ref().and_then(|b| b.opening_rate_now());
+        if let (Some(rate), Some(share)) = (paced, &self.opening_share) {
+            return share.behind(g, rate);
+        }
+        let paced = paced.is_some();
+        let own = self.score(g);
+        let higher_than = |other: &AbstractState| self.score(*other) > own;
         match (&self.recent, &self.wake) {
             (Some(recent), _) => count_at_most(recent.states().filter(higher_than), k),
             (None, Some(wake)) if wake.awake() || paced => {
@@ -201,6 +218,11 @@ impl QueryRule {
             wake.during.push(g);
             wake.silent += 1;
         }
+        if let Some(share) = &mut self.opening_share
+            && self.budget.as_ref().is_some_and(|b| b.in_paced_opening())
+        {
+            share.visit(g);
+        }
         self.should_query(g)
     }
 
@@ -208,6 +230,11 @@ impl QueryRule {
     /// this step's update. Every answer counts, "no feedback" (0) included, and spends a query
     /// of the ceiling's budget.
     pub fn record(&mut self, g: AbstractState, h: f32, h_hat: f32) {
+        if let Some(share) = &mut self.opening_share
+            && self.budget.as_ref().is_some_and(|b| b.in_paced_opening())
+        {
+            share.asked(g);
+        }
         if let Some(budget) = &mut self.budget {
             budget.spend(h);
         }

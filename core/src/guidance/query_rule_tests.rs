@@ -225,6 +225,53 @@ fn a_paced_opening_ranks_as_if_woken_and_asks_its_share_of_a_frozen_history() {
     assert_eq!(asked, 0);
 }
 
+/// A paced opening of 4,000 steps at a quarter of them on a learner that is in A three steps
+/// of four and in B the fourth, every answer as badly predicted: `(asked in A, asked in B)`.
+fn opening_split(by_visits: bool) -> (u64, u64) {
+    let budget = AskBudget::new(0.1, 20)
+        .opening_for(4_000)
+        .starting_empty()
+        .opening_at(0.25);
+    let mut rule = QueryRule::new(0.2, 4, UcbForm::Authors)
+        .waking_after(1_000)
+        .with_ceiling(budget);
+    if by_visits {
+        rule = rule.opening_by_visits();
+    }
+    let mut asked = (0, 0);
+    for step in 0..4_000u64 {
+        let g = if step % 4 == 3 { B } else { A };
+        if rule.visit(g) {
+            rule.record(g, 1.0, 0.0);
+            if g == A {
+                asked.0 += 1;
+            } else {
+                asked.1 += 1;
+            }
+        }
+    }
+    asked
+}
+
+#[test]
+fn a_paced_opening_by_visits_asks_each_state_its_share_of_its_visits() {
+    // By visits: a quarter of A's 3,000 visits and of B's 1,000, as a draw at random steps
+    // would place them (the bucket, empty at the start, costs the first query or so).
+    let (a, b) = opening_split(true);
+    assert!(
+        (748..=750).contains(&a) && (249..=250).contains(&b),
+        "{a}, {b}"
+    );
+    // Ranked, the score's count term lifts the state with fewer answers: the opening's answers
+    // are evened out over the states, as many in B as in A (half of B's visits, a sixth of A's).
+    let (a, b) = opening_split(false);
+    assert!(
+        a + b >= 990,
+        "the ranked opening spends its share too: {a} + {b}"
+    );
+    assert!(a.abs_diff(b) <= 2, "{a}, {b}");
+}
+
 #[test]
 fn a_waking_rule_asks_the_best_state_of_the_silence() {
     let (good, bad) = (AbstractState(20), AbstractState(21));
