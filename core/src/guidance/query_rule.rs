@@ -186,12 +186,13 @@ impl QueryRule {
             Some(budget) if budget.can_ask() => budget.ranks_allowed(self.k),
             Some(_) => return false,
         };
-        // A paced opening must spend its share: ranked as the authors rank, Lunar Lander's rule
-        // asks about a thousand of its first 15k steps whatever the bucket holds.
+        // A paced opening placed by visits asks each state its share of its own visits.
         let paced = self.budget.as_ref().and_then(|b| b.opening_rate_now());
         if let (Some(rate), Some(share)) = (paced, &self.opening_share) {
             return share.behind(g, rate);
         }
+        // Else it must still spend its share: ranked as the authors rank, Lunar Lander's rule
+        // asks about a thousand of its first 15k steps whatever the bucket holds.
         let paced = paced.is_some();
         let own = self.score(g);
         let higher_than = |other: &AbstractState| self.score(*other) > own;
