@@ -58,6 +58,12 @@ pub struct QueryRuleSection {
     /// the learner is) [default `ranked`].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub opening_placement: Option<OpeningPlacement>,
+    /// With an opening repaid from part of the earnings (`opening_repay_share` below 1): where
+    /// the rest is asked while it repays, `ranked` (the best-ranked state only) or `by_visits`
+    /// (each abstract state asked that rest's share of its visits since the repayment began, so
+    /// the rule keeps asking where the learner is) [default `ranked`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub repayment_placement: Option<OpeningPlacement>,
     /// With a ceiling: let the rate run from this floor (recent answers all "good") up to
     /// `max_feedback_rate` (all "bad"); 0: a fixed rate [default 0].
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -86,6 +92,10 @@ impl QueryRuleSection {
             opening_placement: Some(
                 rule.ceiling
                     .map_or_else(Default::default, |x| x.opening_placement),
+            ),
+            repayment_placement: Some(
+                rule.ceiling
+                    .map_or_else(Default::default, |x| x.repayment_placement),
             ),
             min_feedback_rate: Some(rule.ceiling.and_then(|x| x.floor).unwrap_or(0.0)),
             wake_after: Some(rule.wake_after),
@@ -216,6 +226,19 @@ impl QueryRuleSection {
                     ));
                 }
                 c.opening_placement = placement;
+            }
+        }
+        if let Some(placement) = self.repayment_placement {
+            let ranked = placement == OpeningPlacement::Ranked;
+            if let Some(c) = the_ceiling(rule, "repayment_placement", ranked)? {
+                if !ranked && (c.opening == 0 || c.repay_share >= 1.0) {
+                    return Err(SettingsError::bad(
+                        "repayment_placement",
+                        "only an opening repaid from part of the earnings leaves a spare to \
+                         place; set feedback_opening and an opening_repay_share below 1",
+                    ));
+                }
+                c.repayment_placement = placement;
             }
         }
         Ok(())
@@ -455,6 +478,54 @@ mod tests {
         ] {
             let e = rule(&pairs, method).unwrap_err();
             assert!(e.contains("opening_placement") && e.contains(words), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_repayment_by_visits_needs_an_opening_repaid_in_part() {
+        let rule = |pairs: &[(&str, &str)], method| ceiling(Task::LunarLander, pairs, method);
+        let product = rule(&[], EvaluativeMethod::Dref).unwrap().unwrap();
+        assert_eq!(product.repayment_placement, OpeningPlacement::Ranked);
+        // The product's opening (2,000 steps, repaid from 90 %) leaves a spare to place.
+        let placed = [("repayment_placement", "by_visits")];
+        let placed = rule(&placed, EvaluativeMethod::Dref).unwrap().unwrap();
+        assert_eq!(placed.repayment_placement, OpeningPlacement::ByVisits);
+        assert_eq!(
+            rule(
+                &[("repayment_placement", "ranked")],
+                EvaluativeMethod::DrefAuthors
+            ),
+            Ok(None),
+            "its off value on a rule without a ceiling"
+        );
+        for (pairs, method, words) in [
+            (
+                vec![
+                    ("opening_repay_share", "1"),
+                    ("repayment_placement", "by_visits"),
+                ],
+                EvaluativeMethod::Dref,
+                "opening_repay_share below 1",
+            ),
+            (
+                vec![
+                    ("feedback_opening", "0"),
+                    ("repayment_placement", "by_visits"),
+                ],
+                EvaluativeMethod::Dref,
+                "set feedback_opening",
+            ),
+            (
+                vec![("repayment_placement", "by_visits")],
+                EvaluativeMethod::DrefAuthors,
+                "no ceiling",
+            ),
+        ] {
+            let e = rule(&pairs, method).unwrap_err();
+            assert!(
+                e.contains("repayment_placement") && e.contains(words),
+                "{e}"
+            );
         }
     }
 }

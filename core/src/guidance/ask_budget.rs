@@ -158,6 +158,13 @@ impl AskBudget {
         bucket.map(|bucket| bucket.rate)
     }
 
+    /// The share of its steps the spare may ask, while an opening's debt is repaid from part
+    /// of the earnings (`None` otherwise): the earnings' share the repayment leaves.
+    pub fn spare_rate_now(&self) -> Option<f64> {
+        let repaying = self.tokens < 0.0 && !self.in_opening && self.repay_share < 1.0;
+        repaying.then(|| self.current_rate() * (1.0 - self.repay_share))
+    }
+
     /// The same bucket with a rate between `floor` and its ceiling, by the share of "bad"
     /// answers among the last [`RATE_ANSWERS`] (the ceiling before any answer).
     pub fn following_answers(mut self, floor: f64) -> Self {

@@ -66,6 +66,11 @@ pub struct FeedbackCeiling {
     /// abstract state its share of its own visits.
     #[serde(default, skip_serializing_if = "is_ranked")]
     pub opening_placement: OpeningPlacement,
+    /// Where the spare is asked while an opening's debt is repaid: ranked (the default, the
+    /// best-ranked state only; configs before it read so), or each abstract state its share of
+    /// its own visits since the repayment began.
+    #[serde(default, skip_serializing_if = "is_ranked")]
+    pub repayment_placement: OpeningPlacement,
 }
 
 fn is_ranked(placement: &OpeningPlacement) -> bool {
@@ -105,6 +110,7 @@ pub const DEFAULT_CEILING: FeedbackCeiling = FeedbackCeiling {
     repay_share: 1.0,
     opening_rate: None,
     opening_placement: OpeningPlacement::Ranked,
+    repayment_placement: OpeningPlacement::Ranked,
 };
 /// The product DREF's silence wake: after 1,000 steps without a query the rule ranks the current
 /// state among the states of that silence, so it cannot freeze, and otherwise ranks as the
@@ -173,6 +179,9 @@ impl QueryRuleConfig {
             rule = rule.with_ceiling(ceiling.budget());
             if ceiling.opening_placement == OpeningPlacement::ByVisits {
                 rule = rule.opening_by_visits();
+            }
+            if ceiling.repayment_placement == OpeningPlacement::ByVisits {
+                rule = rule.repayment_by_visits();
             }
         }
         if self.wake_after > 0 {

@@ -17,7 +17,8 @@
 //! states visited during that silence ([`SilenceWake`]), so the rule cannot stay silent while
 //! the learner is somewhere else than where its best-ranked states are. During a paced opening
 //! ([`AskBudget::opening_at`]) the rule ranks as if woken from the start, among the states of
-//! its last `wake_after` steps, or asks each state its share of its own visits ([`VisitShare`]).
+//! its last `wake_after` steps, or asks each state its share of its own visits ([`VisitShare`]);
+//! the spare a repayment leaves after it may be placed by visits too.
 
 use std::collections::BTreeMap;
 
@@ -73,6 +74,10 @@ pub struct QueryRule {
     /// its visits instead of by rank (`None`: by rank).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     opening_share: Option<Box<VisitShare>>,
+    /// The same for the spare a repayment leaves after the opening (`None`: only the
+    /// best-ranked state may ask it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    repayment_share: Option<Box<VisitShare>>,
 }
 
 /// The steps since the rule last asked, and the states visited in the last `after` of them:
@@ -115,6 +120,7 @@ impl QueryRule {
             budget: None,
             wake: None,
             opening_share: None,
+            repayment_share: None,
         }
     }
 
@@ -129,6 +135,13 @@ impl QueryRule {
     /// rank ([`VisitShare`]); after the opening the rule ranks as before.
     pub fn opening_by_visits(mut self) -> Self {
         self.opening_share = Some(Box::default());
+        self
+    }
+
+    /// While an opening's debt is repaid, ask each state the spare's share of its visits
+    /// since the repayment began rather than only the best-ranked one ([`VisitShare`]).
+    pub fn repayment_by_visits(mut self) -> Self {
+        self.repayment_share = Some(Box::default());
         self
     }
 
@@ -191,6 +204,11 @@ impl QueryRule {
         if let (Some(rate), Some(share)) = (paced, &self.opening_share) {
             return share.behind(g, rate);
         }
+        // So does the spare of a repayment placed by visits.
+        let spare = self.budget.as_ref().and_then(|b| b.spare_rate_now());
+        if let (Some(rate), Some(share)) = (spare, &self.repayment_share) {
+            return share.behind(g, rate);
+        }
         // Else it must still spend its share: ranked as the authors rank, Lunar Lander's rule
         // asks about a thousand of its first 15k steps whatever the bucket holds.
         let paced = paced.is_some();
@@ -224,6 +242,14 @@ impl QueryRule {
         {
             share.visit(g);
         }
+        if let Some(share) = &mut self.repayment_share
+            && self
+                .budget
+                .as_ref()
+                .is_some_and(|b| b.spare_rate_now().is_some())
+        {
+            share.visit(g);
+        }
         self.should_query(g)
     }
 
@@ -233,6 +259,14 @@ impl QueryRule {
     pub fn record(&mut self, g: AbstractState, h: f32, h_hat: f32) {
         if let Some(share) = &mut self.opening_share
             && self.budget.as_ref().is_some_and(|b| b.in_paced_opening())
+        {
+            share.asked(g);
+        }
+        if let Some(share) = &mut self.repayment_share
+            && self
+                .budget
+                .as_ref()
+                .is_some_and(|b| b.spare_rate_now().is_some())
         {
             share.asked(g);
         }

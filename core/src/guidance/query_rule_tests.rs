@@ -272,6 +272,59 @@ fn a_paced_opening_by_visits_asks_each_state_its_share_of_its_visits() {
     assert!(a.abs_diff(b) <= 2, "{a}, {b}");
 }
 
+/// After a paced opening of 1,000 steps at half of them (500 asked, 100 earned: a debt of 400)
+/// on the same 3:1 learner, the ceiling's 10 % repaid half from its earnings: the debt is paid
+/// by about step 9,000 and the other half, 400 queries, is the spare. `(asked in A, asked in B)`
+/// from the opening's end to step 9,000, and the steps asked in that stretch's last 2,000.
+fn repayment_split(by_visits: bool) -> ((u64, u64), u64) {
+    let budget = AskBudget::new(0.1, 20)
+        .opening_for(1_000)
+        .starting_empty()
+        .opening_at(0.5)
+        .repaying(0.5);
+    let mut rule = QueryRule::new(0.2, 4, UcbForm::Authors)
+        .waking_after(1_000)
+        .with_ceiling(budget)
+        .opening_by_visits();
+    if by_visits {
+        rule = rule.repayment_by_visits();
+    }
+    let (mut asked, mut late) = ((0, 0), 0);
+    for step in 0..9_000u64 {
+        let g = if step % 4 == 3 { B } else { A };
+        if rule.visit(g) {
+            rule.record(g, 1.0, 0.0);
+            if step < 1_000 {
+                continue;
+            }
+            late += u64::from(step >= 7_000);
+            if g == A {
+                asked.0 += 1;
+            } else {
+                asked.1 += 1;
+            }
+        }
+    }
+    (asked, late)
+}
+
+#[test]
+fn a_repayment_by_visits_spends_its_spare_where_the_learner_is() {
+    // By visits: the spare's 5 % of A's 6,000 visits and of B's 2,000, spread over the stretch
+    // (the debt is repaid a few steps before 9,000, when the ceiling's ranking asks a few more).
+    let ((a, b), late) = repayment_split(true);
+    assert!(
+        (295..=300).contains(&a) && (98..=105).contains(&b),
+        "{a}, {b}"
+    );
+    assert!((90..=110).contains(&late), "{late} in the last 2,000 steps");
+    // Ranked, only the best-ranked state may ask the spare, and the score's count term makes
+    // that the state with fewer answers: as much is spent, most of it in B.
+    let ((a, b), _) = repayment_split(false);
+    assert!(a + b >= 390, "the ranked spare is spent too: {a} + {b}");
+    assert!(b > 2 * a, "{a}, {b}");
+}
+
 #[test]
 fn a_waking_rule_asks_the_best_state_of_the_silence() {
     let (good, bad) = (AbstractState(20), AbstractState(21));
