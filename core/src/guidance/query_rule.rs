@@ -199,19 +199,14 @@ impl QueryRule {
             Some(budget) if budget.can_ask() => budget.ranks_allowed(self.k),
             Some(_) => return false,
         };
-        // A paced opening placed by visits asks each state its share of its own visits.
-        let paced = self.budget.as_ref().and_then(|b| b.opening_rate_now());
-        if let (Some(rate), Some(share)) = (paced, &self.opening_share) {
+        // A paced opening, or a repayment's spare, placed by visits asks each state its share
+        // of its own visits.
+        if let Some((rate, share)) = self.placement() {
             return share.behind(g, rate);
         }
-        // So does the spare of a repayment placed by visits.
-        let spare = self.budget.as_ref().and_then(|b| b.spare_rate_now());
-        if let (Some(rate), Some(share)) = (spare, &self.repayment_share) {
-            return share.behind(g, rate);
-        }
-        // Else it must still spend its share: ranked as the authors rank, Lunar Lander's rule
-        // asks about a thousand of its first 15k steps whatever the bucket holds.
-        let paced = paced.is_some();
+        // Else a paced opening must still spend its share: ranked as the authors rank, Lunar
+        // Lander's rule asks about a thousand of its first 15k steps whatever the bucket holds.
+        let paced = self.budget.as_ref().is_some_and(|b| b.in_paced_opening());
         let own = self.score(g);
         let higher_than = |other: &AbstractState| self.score(*other) > own;
         match (&self.recent, &self.wake) {
@@ -237,37 +232,41 @@ impl QueryRule {
             wake.during.push(g);
             wake.silent += 1;
         }
-        if let Some(share) = &mut self.opening_share
-            && self.budget.as_ref().is_some_and(|b| b.in_paced_opening())
-        {
-            share.visit(g);
-        }
-        if let Some(share) = &mut self.repayment_share
-            && self
-                .budget
-                .as_ref()
-                .is_some_and(|b| b.spare_rate_now().is_some())
-        {
+        if let Some(share) = self.placement_mut() {
             share.visit(g);
         }
         self.should_query(g)
+    }
+
+    /// The visits that place this step's question, with the share of them to ask: the
+    /// opening's during a paced opening placed by visits, the repayment's while a debt whose
+    /// spare is placed by visits is repaid (`None`: the step is ranked).
+    fn placement(&self) -> Option<(f64, &VisitShare)> {
+        let budget = self.budget.as_deref()?;
+        if let Some(rate) = budget.opening_rate_now() {
+            return self.opening_share.as_deref().map(|share| (rate, share));
+        }
+        let rate = budget.spare_rate_now()?;
+        self.repayment_share.as_deref().map(|share| (rate, share))
+    }
+
+    /// [`QueryRule::placement`]'s visits, to count a visit or a question in.
+    fn placement_mut(&mut self) -> Option<&mut VisitShare> {
+        let budget = self.budget.as_deref()?;
+        if budget.in_paced_opening() {
+            self.opening_share.as_deref_mut()
+        } else if budget.spare_rate_now().is_some() {
+            self.repayment_share.as_deref_mut()
+        } else {
+            None
+        }
     }
 
     /// Record the trainer's answer `h` in `g`, where the human critic predicted `h_hat` before
     /// this step's update. Every answer counts, "no feedback" (0) included, and spends a query
     /// of the ceiling's budget.
     pub fn record(&mut self, g: AbstractState, h: f32, h_hat: f32) {
-        if let Some(share) = &mut self.opening_share
-            && self.budget.as_ref().is_some_and(|b| b.in_paced_opening())
-        {
-            share.asked(g);
-        }
-        if let Some(share) = &mut self.repayment_share
-            && self
-                .budget
-                .as_ref()
-                .is_some_and(|b| b.spare_rate_now().is_some())
-        {
+        if let Some(share) = self.placement_mut() {
             share.asked(g);
         }
         if let Some(budget) = &mut self.budget {
