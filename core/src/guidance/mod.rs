@@ -4,7 +4,8 @@
 //! - `query_rule`: DREF's UCB rule over abstract states (Eq. 1-2 and the authors' form).
 //! - `recent_visits`, `ask_budget`: the product DREF's rank among recent visits and its ceiling on
 //!   the rate of queries (`docs/dref.md`); the authors' rule uses neither.
-//! - `visit_share`: where a paced opening asks: by rank, or each state its share of its visits.
+//! - `visit_share`: where a paced opening (or a repayment's spare) asks: by rank, or each state
+//!   its share of its visits.
 //! - `ask_pacing`: a rule's floods and freezes, as runs, sessions and grids report them.
 //! - `feedback_schedule`: which steps ask, per method (DREF, EF-p%, SAC).
 //! - `evaluative_trainer`: the `EvaluativeTrainer` trait (synthetic oracle or a person) and H.

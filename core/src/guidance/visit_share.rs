@@ -9,7 +9,9 @@
 //! same rate took off sooner on both seeds it ran (docs/dref.md, "The probe's seed 1"). By
 //! visits, each state is asked `rate` of its own visits: the answers follow the learner as a
 //! random draw would, but a state is never short of its share, and the choice still reads only
-//! the scene graph and the answers, DREF's inputs.
+//! the scene graph and the answers, DREF's inputs. The spare a repayment leaves after the
+//! opening may be placed the same way (`repayment_placement = "by_visits"`), with visits counted
+//! from the repayment's start.
 
 use std::collections::BTreeMap;
 
