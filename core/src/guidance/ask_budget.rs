@@ -161,8 +161,14 @@ impl AskBudget {
     /// The share of its steps the spare may ask, while an opening's debt is repaid from part
     /// of the earnings (`None` otherwise): the earnings' share the repayment leaves.
     pub fn spare_rate_now(&self) -> Option<f64> {
-        let repaying = self.tokens < 0.0 && !self.in_opening && self.repay_share < 1.0;
-        repaying.then(|| self.current_rate() * (1.0 - self.repay_share))
+        self.repaying_in_part()
+            .then(|| self.current_rate() * (1.0 - self.repay_share))
+    }
+
+    /// Whether a debt is being repaid from part of the earnings now: after the opening, with a
+    /// repayment share below 1 (the rest is the spare).
+    fn repaying_in_part(&self) -> bool {
+        self.tokens < 0.0 && !self.in_opening && self.repay_share < 1.0
     }
 
     /// The same bucket with a rate between `floor` and its ceiling, by the share of "bad"
@@ -189,7 +195,7 @@ impl AskBudget {
         self.in_opening = self.opening_left > 0;
         self.opening_left = self.opening_left.saturating_sub(1);
         let earned = self.current_rate();
-        if self.tokens < 0.0 && !self.in_opening && self.repay_share < 1.0 {
+        if self.repaying_in_part() {
             let repaid = earned * self.repay_share;
             self.tokens += repaid;
             self.spare += earned - repaid;
