@@ -151,6 +151,34 @@ fn an_expert_trains_and_drives_dref_and_ef_runs() {
             assert_eq!(row[5] == 0.0, method == "sac", "{method}: {row:?}");
             assert!(row[6] > 0.0, "{method}: {row:?}");
         }
+        // The answers by sign: a row per episode at the same step, whose counts add up to the
+        // queries `metrics.csv` counts (EF-100: every step of the episode; SAC: none).
+        let answers = std::fs::read_to_string(d.join(&out_dir).join("answers.csv")).unwrap();
+        let mut rows = answers.lines();
+        assert_eq!(rows.next(), Some("step,episode,asked,good,bad,none"));
+        let rows: Vec<Vec<u64>> = rows
+            .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
+            .collect();
+        assert_eq!(
+            rows.len(),
+            episodes.len(),
+            "{method}: an answers row per episode"
+        );
+        let mut asked_so_far = 0;
+        for (row, episode) in rows.iter().zip(&episodes) {
+            assert_eq!(row[0], episode[0].parse::<u64>().unwrap(), "{method}: step");
+            assert_eq!(row[2], row[3] + row[4] + row[5], "{method}: {row:?}");
+            asked_so_far += row[2];
+            assert_eq!(asked_so_far, episode[6].parse::<u64>().unwrap(), "{method}");
+            let length: u64 = episode[3].parse().unwrap();
+            match method {
+                "ef-100" => assert_eq!(row[2], length, "{method}: {row:?}"),
+                "sac" => assert_eq!(row[2], 0, "{method}: {row:?}"),
+                _ => {}
+            }
+        }
+        // A teacher without faults always judges: +1 or -1, never "no feedback".
+        assert!(rows.iter().all(|r| r[5] == 0), "{method}");
     }
 }
 
@@ -292,6 +320,9 @@ fn a_run_killed_midway_resumes_from_its_checkpoint_to_the_same_result() {
         learner("straight").lines().count(),
         metrics("straight").lines().count()
     );
+    // And the answers by sign.
+    let answers = |run: &str| std::fs::read_to_string(d.join(run).join("answers.csv")).unwrap();
+    assert_eq!(answers("killed"), answers("straight"));
     assert!(
         !checkpoint.exists(),
         "a finished run removes its checkpoint"

@@ -8,7 +8,8 @@ a rolling 10 episodes (8 of 10 succeed; on Lunar Lander their mean return is 200
 
 A folder holds `seed<N>/` runs (metrics.csv: one row per episode with its end step, return,
 outcome and the run's feedback count so far; learner.csv, where the run has one: the means of
-each episode's updates, binned the same way). A cumulative reward says how much a run earned;
+each episode's updates, binned the same way; answers.csv, where the run has one: the share of
+its answers in each stretch that were +1). A cumulative reward says how much a run earned;
 this says when: a run that learns late earns little even if it ends learnt.
 """
 
@@ -75,6 +76,28 @@ def binned_learner(rows: list[dict[str, str]], column: str, width: int) -> list[
     return out
 
 
+def answer_rows(run: Path) -> list[dict[str, str]]:
+    """The run's answers.csv (the answers by sign; binaries of the twenty-seventh session or
+    later), or nothing."""
+    path = run / "answers.csv"
+    if not path.exists():
+        return []
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def binned_good_share(rows: list[dict[str, str]], width: int) -> list[float | None]:
+    """Per stretch of `width` steps: the share of the answers given in the episodes that ended
+    in it that were +1 (`None` where nothing was asked)."""
+    end = int(rows[-1]["step"])
+    out: list[float | None] = []
+    for start in range(0, end, width):
+        inside = [r for r in rows if start < int(r["step"]) <= start + width]
+        asked = sum(int(r["asked"]) for r in inside)
+        out.append(sum(int(r["good"]) for r in inside) / asked if asked else None)
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("folder", type=Path)
@@ -100,6 +123,12 @@ def main() -> None:
                     "   -  " if m is None else f"{m:6.3g}" for m in binned_learner(learner, column, args.bin)
                 )
                 print(f"  {column + ', its mean:':<36} {means}")
+        answers = answer_rows(run)
+        if answers:
+            shares = " ".join(
+                "   -  " if m is None else f"{m:6.2f}" for m in binned_good_share(answers, args.bin)
+            )
+            print(f"  {'answers that were +1, their share:':<36} {shares}")
 
 
 if __name__ == "__main__":

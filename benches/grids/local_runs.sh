@@ -37,6 +37,8 @@ one() {
     cp "$scratch/$dir/config.json" "$scratch/$dir/metrics.csv" "$results/$dir/"
     # The learner's curves, where the binary writes them (7b894c2c or later).
     [ -e "$scratch/$dir/learner.csv" ] && cp "$scratch/$dir/learner.csv" "$results/$dir/"
+    # The answers by sign, where the binary writes them (the twenty-seventh session's or later).
+    [ -e "$scratch/$dir/answers.csv" ] && cp "$scratch/$dir/answers.csv" "$results/$dir/"
     # summary.json last: its presence marks the run finished.
     cp "$scratch/$dir/summary.json" "$results/$dir/"
   fi

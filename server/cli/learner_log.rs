@@ -6,13 +6,9 @@
 //! checks stop a drive mid-episode; that episode's row then averages the updates after the
 //! check only, and its `updates` column says how many.)
 
-use std::fs::{self, File};
-use std::io::{BufWriter, Write};
 use std::path::Path;
 
-use anyhow::Context;
-
-use super::output::write_atomically;
+use super::episode_file::{EpisodeFile, keep_episode_rows};
 use crate::rl::UpdateStats;
 
 /// The file's name inside a run's folder.
@@ -32,28 +28,15 @@ struct EpisodeSums {
 
 /// Appends a row per finished episode to `learner.csv`.
 pub struct LearnerLog {
-    csv: BufWriter<File>,
+    file: EpisodeFile,
     sums: EpisodeSums,
 }
 
 impl LearnerLog {
-    /// A new file in `out`, or the one an earlier call began when `append` (created with its
-    /// header if that run had none: a run begun by a build without this file starts it at the
-    /// episode it resumes from).
+    /// A new file in `out`, or the one an earlier call began when `append`.
     pub fn open(out: &Path, append: bool) -> anyhow::Result<Self> {
-        let path = out.join(LEARNER_FILE);
-        let fresh = !append || !path.exists();
-        let file = if fresh {
-            File::create(&path)
-        } else {
-            File::options().append(true).open(&path)
-        };
-        let mut csv = BufWriter::new(file.with_context(|| format!("opening {}", path.display()))?);
-        if fresh {
-            writeln!(csv, "{HEADER}")?;
-        }
         Ok(Self {
-            csv,
+            file: EpisodeFile::open(&out.join(LEARNER_FILE), HEADER, append)?,
             sums: EpisodeSums::default(),
         })
     }
@@ -76,39 +59,19 @@ impl LearnerLog {
             0 => String::new(),
             n => format!("{}", sum / n as f64),
         };
-        writeln!(
-            self.csv,
+        self.file.row(format_args!(
             "{step},{episode},{},{},{},{},{}",
             s.updates,
             mean(s.critic_loss),
             mean(s.actor_loss),
             mean(s.human_critic_loss),
             mean(s.ent_coef)
-        )?;
-        self.csv.flush()?;
-        Ok(())
+        ))
     }
 }
 
 /// Cut `learner.csv` in `out` back to the rows of episodes before `episodes` (those a run
 /// checkpoint counts); nothing to do if the run has no such file.
 pub fn keep_learner_rows(out: &Path, episodes: u64) -> anyhow::Result<()> {
-    let path = out.join(LEARNER_FILE);
-    let text = match fs::read_to_string(&path) {
-        Ok(text) => text,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
-        Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
-    };
-    let mut keep = vec![HEADER];
-    for line in text.lines().skip(1) {
-        let episode: u64 = line
-            .split(',')
-            .nth(1)
-            .and_then(|e| e.parse().ok())
-            .with_context(|| format!("{}: a row without its episode: {line:?}", path.display()))?;
-        if episode < episodes {
-            keep.push(line);
-        }
-    }
-    write_atomically(&path, format!("{}\n", keep.join("\n")).as_bytes())
+    keep_episode_rows(&out.join(LEARNER_FILE), HEADER, episodes)
 }

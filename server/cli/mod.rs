@@ -1,11 +1,13 @@
 //! The `dualrep` command line: one sub-command per file, each a thin shell over the library.
 
+mod answer_log;
 mod arg_error;
 mod bench;
 mod bench_env;
 mod bench_kernels;
 mod bench_train;
 mod compute;
+mod episode_file;
 mod expert;
 mod export;
 mod grid_executor;

@@ -15,6 +15,7 @@ use anyhow::Context;
 use clap::Args;
 use serde::Serialize;
 
+use super::answer_log::{AnswerLog, keep_answer_rows};
 use super::arg_error::ArgError;
 use super::learner_log::{LearnerLog, keep_learner_rows};
 use super::output::publish_summary;
@@ -162,9 +163,9 @@ fn find_expert(explicit: Option<&Path>, task: &str, builtin: Option<Task>) -> an
     }
 }
 
-/// Run `run` to `steps`, writing finished episodes to `metrics.csv` and the learner's means
-/// over each to `learner.csv` in `out` (new files, or appended to those an earlier call began
-/// when `append`).
+/// Run `run` to `steps`, writing finished episodes to `metrics.csv`, the learner's means over
+/// each to `learner.csv` and the answers in each by sign to `answers.csv` in `out` (new files,
+/// or appended to those an earlier call began when `append`).
 pub fn drive(
     run: &mut EvaluativeRun,
     trainer: &mut dyn EvaluativeTrainer,
@@ -189,6 +190,7 @@ pub fn drive(
         )?;
     }
     let mut learner_log = LearnerLog::open(out, append)?;
+    let mut answer_log = AnswerLog::open(out, append)?;
     let mut episodes = Vec::new();
     let mut progress = Progress::new(steps, label);
     while run.steps() < steps {
@@ -198,8 +200,12 @@ pub fn drive(
         if let Some(stats) = &report.update {
             learner_log.update(stats);
         }
+        if let Some(answer) = report.evaluation {
+            answer_log.answered(answer);
+        }
         if let Some(e) = report.episode {
             learner_log.episode_end(e.step, e.episode)?;
+            answer_log.episode_end(e.step, e.episode)?;
             writeln!(
                 csv,
                 "{},{},{},{},{},{},{},{},{},{},{}",
@@ -307,6 +313,7 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
                 .with_context(|| format!("reading the notes in {}", checkpoint_path.display()))?;
             keep_episodes(&args.out.join("metrics.csv"), run.episodes())?;
             keep_learner_rows(&args.out, run.episodes())?;
+            keep_answer_rows(&args.out, run.episodes())?;
             eprintln!(
                 "{label}: resumed from {CHECKPOINT_FILE} at step {}",
                 run.steps()
