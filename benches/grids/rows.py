@@ -6,8 +6,9 @@ one-sided Mann-Whitney test that the first row lies above the second.
         [docs/results/fig3/placing/dref-authors]
 
 A folder holds `seed<N>/` runs (summary.json, metrics.csv). Each run's line: cumulative reward,
-feedback %, longest flood after 2k steps, successes in its last 10 episodes (on Lunar Lander with
-their mean return), wall seconds and kernels; a run learns as the report says (8 or more of its
+feedback % (and, where the run has answers.csv, the share of its answers that were +1), longest
+flood after 2k steps, successes in its last 10 episodes (on Lunar Lander with their mean return),
+wall seconds and kernels; a run learns as the report says (8 or more of its
 last 10 succeed; on Lunar Lander their mean return is 200 or more). The test counts ties as one
 half and enumerates every split of the pooled ranks, so its p is exact for the seeds given (no
 normal approximation).
@@ -36,8 +37,21 @@ def runs(folder: Path) -> list[dict]:
         summary["last10_episodes"] = last
         summary["last10"] = sum(e["outcome"] == "success" for e in last)
         summary["last10_return"] = mean_return(last)
+        summary["good_share"] = good_share(seed_dir)
         rows.append(summary)
     return rows
+
+
+def good_share(seed_dir: Path) -> float | None:
+    """The share of a run's answers that were +1 (answers.csv, where the run has one; `None`
+    without one or without answers)."""
+    path = seed_dir / "answers.csv"
+    if not path.exists():
+        return None
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    asked = sum(int(r["asked"]) for r in rows)
+    return sum(int(r["good"]) for r in rows) / asked if asked else None
 
 
 def mean_return(window: list[dict[str, str]]) -> float:
@@ -112,6 +126,11 @@ def exact_p_above(xs: list[float], ys: list[float]) -> tuple[float, float]:
     return observed, hits / total
 
 
+def answered_good(run: dict) -> str:
+    share = run.get("good_share")
+    return "" if share is None else f", {100 * share:.0f} % of answers +1"
+
+
 def last10_return(run: dict) -> str:
     if run.get("task") != "lunar-lander":
         return ""
@@ -127,7 +146,7 @@ def main() -> None:
         for r in rows:
             print(
                 f"  seed {r['seed']}: {r['cumulative_return'] / 1000:.1f}k at "
-                f"{100 * r['feedback_fraction']:.2f} %, flood after 2k "
+                f"{100 * r['feedback_fraction']:.2f} %{answered_good(r)}, flood after 2k "
                 f"{r.get('longest_flood_after_2k', '-')}, last 10: {r['last10']}"
                 f"{last10_return(r)}, "
                 f"{r.get('wall_seconds', 0):.0f} s, {r.get('kernels', 'portable')}"
