@@ -53,9 +53,10 @@ def binned(rows: list[dict[str, str]], width: int) -> list[tuple[float | None, i
     return out
 
 
-def learner_rows(run: Path) -> list[dict[str, str]]:
-    """The run's learner.csv (binaries of 7b894c2c or later), or nothing."""
-    path = run / "learner.csv"
+def side_rows(run: Path, name: str) -> list[dict[str, str]]:
+    """The run's per-episode file `name` beside metrics.csv (learner.csv: binaries of 7b894c2c or
+    later; answers.csv, the answers by sign: the twenty-seventh session's or later), or nothing."""
+    path = run / name
     if not path.exists():
         return []
     with open(path) as f:
@@ -74,16 +75,6 @@ def binned_learner(rows: list[dict[str, str]], column: str, width: int) -> list[
             sum(float(r[column]) * int(r["updates"]) for r in inside) / updates if updates else None
         )
     return out
-
-
-def answer_rows(run: Path) -> list[dict[str, str]]:
-    """The run's answers.csv (the answers by sign; binaries of the twenty-seventh session or
-    later), or nothing."""
-    path = run / "answers.csv"
-    if not path.exists():
-        return []
-    with open(path) as f:
-        return list(csv.DictReader(f))
 
 
 def binned_good_share(rows: list[dict[str, str]], width: int) -> list[float | None]:
@@ -116,14 +107,14 @@ def main() -> None:
         print(f"{run.name}: first learnt at {'never' if at is None else f'{at} steps'}")
         print(f"  mean return a {args.bin}-step stretch: {returns}")
         print(f"  queries asked in it:                 {asked}")
-        learner = learner_rows(run)
+        learner = side_rows(run, "learner.csv")
         if learner:
             for column in ("critic_loss", "actor_loss", "human_critic_loss", "ent_coef"):
                 means = " ".join(
                     "   -  " if m is None else f"{m:6.3g}" for m in binned_learner(learner, column, args.bin)
                 )
                 print(f"  {column + ', its mean:':<36} {means}")
-        answers = answer_rows(run)
+        answers = side_rows(run, "answers.csv")
         if answers:
             shares = " ".join(
                 "   -  " if m is None else f"{m:6.2f}" for m in binned_good_share(answers, args.bin)

@@ -7,8 +7,7 @@
 //! from there, bit for bit, and the file is removed once `summary.json` is written (the
 //! checkpoint, the folder's lock and what a resume keeps: `train_checkpoint.rs`).
 
-use std::fs::{self, File};
-use std::io::{BufWriter, Write};
+use std::fs;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
@@ -17,6 +16,7 @@ use serde::Serialize;
 
 use super::answer_log::{AnswerLog, keep_answer_rows};
 use super::arg_error::ArgError;
+use super::episode_file::EpisodeFile;
 use super::learner_log::{LearnerLog, keep_learner_rows};
 use super::output::publish_summary;
 use super::overrides;
@@ -163,6 +163,10 @@ fn find_expert(explicit: Option<&Path>, task: &str, builtin: Option<Task>) -> an
     }
 }
 
+/// `metrics.csv`'s columns: one row per finished episode.
+const METRICS_HEADER: &str = "step,episode,return,length,outcome,cumulative_return,feedback_count,\
+     feedback_fraction,states_with_feedback,steps_since_query,longest_flood";
+
 /// Run `run` to `steps`, writing finished episodes to `metrics.csv`, the learner's means over
 /// each to `learner.csv` and the answers in each by sign to `answers.csv` in `out` (new files,
 /// or appended to those an earlier call began when `append`).
@@ -175,20 +179,7 @@ pub fn drive(
     append: bool,
     mut checkpoints: Option<&mut Checkpointer>,
 ) -> anyhow::Result<Vec<EpisodeRecord>> {
-    let path = out.join("metrics.csv");
-    let file = if append {
-        File::options().append(true).open(&path)
-    } else {
-        File::create(&path)
-    };
-    let mut csv = BufWriter::new(file.with_context(|| format!("opening {}", path.display()))?);
-    if !append {
-        writeln!(
-            csv,
-            "step,episode,return,length,outcome,cumulative_return,feedback_count,feedback_fraction,\
-             states_with_feedback,steps_since_query,longest_flood"
-        )?;
-    }
+    let mut metrics = EpisodeFile::open(&out.join("metrics.csv"), METRICS_HEADER, append)?;
     let mut learner_log = LearnerLog::open(out, append)?;
     let mut answer_log = AnswerLog::open(out, append)?;
     let mut episodes = Vec::new();
@@ -206,8 +197,7 @@ pub fn drive(
         if let Some(e) = report.episode {
             learner_log.episode_end(e.step, e.episode)?;
             answer_log.episode_end(e.step, e.episode)?;
-            writeln!(
-                csv,
+            metrics.row(format_args!(
                 "{},{},{},{},{},{},{},{},{},{},{}",
                 e.step,
                 e.episode,
@@ -220,8 +210,7 @@ pub fn drive(
                 e.states_with_feedback,
                 e.steps_since_query,
                 e.longest_flood
-            )?;
-            csv.flush()?;
+            ))?;
             if let Some(c) = checkpoints.as_deref_mut() {
                 c.record(&e);
                 c.maybe_save(run, trainer)?;
