@@ -16,8 +16,9 @@
 //!
 //! Here: the list and how it reads. The sections, each with its defaults and what it does to a
 //! run: `session`, `people` (who answers and the synthetic teacher), `sac`, `query_rule`,
-//! `evaluative` (reward scale, a person's pace), `as_run`, `task_version` (scene graph and
-//! env), `preference`; `run_configs`: a run's configuration from them all.
+//! `evaluative` (reward scale, a person's pace), `oracle` (the synthetic evaluative oracle),
+//! `as_run`, `task_version` (scene graph and env), `preference`; `run_configs`: a run's
+//! configuration from them all.
 
 use std::sync::LazyLock;
 
@@ -34,6 +35,7 @@ mod combine;
 mod error;
 mod evaluative;
 mod keys;
+mod oracle;
 mod people;
 mod preference;
 mod query_rule;
@@ -46,6 +48,7 @@ pub use as_run::{AsRunSection, Profile, SceneGraphChoice, time_limit_as_run};
 pub use combine::Combine;
 pub use error::SettingsError;
 pub use evaluative::EvaluativeSection;
+pub use oracle::OracleSection;
 pub use people::{NeverWord, RationalWord, TeacherBeta, TeacherSection, TeacherSkip};
 pub use preference::PreferenceSection;
 pub use query_rule::QueryRuleSection;
@@ -89,6 +92,9 @@ pub struct Settings {
     /// The reward's scale and a person's pace.
     #[serde(flatten)]
     pub evaluative: EvaluativeSection,
+    /// The synthetic evaluative oracle.
+    #[serde(flatten)]
+    pub oracle: OracleSection,
     /// The authors' published runs.
     #[serde(flatten)]
     pub as_run: AsRunSection,
@@ -113,6 +119,7 @@ macro_rules! for_each_section {
         $visit!(human_critic, HumanCriticSection);
         $visit!(query_rule, QueryRuleSection);
         $visit!(evaluative, EvaluativeSection);
+        $visit!(oracle, OracleSection);
         $visit!(as_run, AsRunSection);
         $visit!(scene_graph, SceneGraphSection);
         $visit!(env, EnvSection);
@@ -215,6 +222,7 @@ impl Settings {
                     human_critic: HumanCriticSection::offered(&c.sac),
                     query_rule: QueryRuleSection::offered(&c.query_rule),
                     evaluative: EvaluativeSection::offered(&c),
+                    oracle: OracleSection::offered(&c.oracle),
                     as_run: AsRunSection::offered(&c),
                     env: EnvSection::offered(task, &c.env),
                     ..shared

@@ -7,9 +7,6 @@ pub enum ArgError {
     /// `--betas`: neither a number >= 0 nor `rational`.
     #[error("{0:?}: expected a rationality >= 0 or `rational`")]
     Beta(String),
-    /// `--oracle-rule`.
-    #[error("unknown oracle rule {0:?}: expected authors or sign-aware")]
-    OracleRule(String),
     /// `--acquisition`.
     #[error("unknown acquisition {0:?}: expected uniform or mutual-information")]
     Acquisition(String),

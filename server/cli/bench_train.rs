@@ -12,7 +12,7 @@ use serde::Serialize;
 use super::compute::Compute;
 use crate::guidance::evaluative_run::{EvaluativeRun, EvaluativeRunConfig};
 use crate::guidance::evaluative_trainer::{EvaluativeTrainer, NoTrainer};
-use crate::guidance::expert_oracle::{ExpertOracle, OracleRule};
+use crate::guidance::expert_oracle::ExpertOracle;
 use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::rl::kernels::{self, KernelPath};
 use crate::sim::Task;
@@ -54,7 +54,7 @@ pub fn run(args: TrainBenchArgs, compute: &Compute) -> anyhow::Result<()> {
         _ => {
             let expert = crate::session::load_task_expert(None, args.task)?;
             let act_dim = config.make_env().spec().action_space.dim();
-            Box::new(ExpertOracle::new(expert, act_dim, OracleRule::Authors))
+            Box::new(ExpertOracle::new(expert, act_dim))
         }
     };
     let mut run = EvaluativeRun::new(config, args.steps);

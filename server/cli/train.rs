@@ -15,7 +15,6 @@ use clap::Args;
 use serde::Serialize;
 
 use super::answer_log::{AnswerLog, keep_answer_rows};
-use super::arg_error::ArgError;
 use super::episode_file::EpisodeFile;
 use super::learner_log::{LearnerLog, keep_learner_rows};
 use super::output::publish_summary;
@@ -29,7 +28,7 @@ use super::train_checkpoint::{
 use crate::guidance::evaluative_run::{EpisodeRecord, EvaluativeRun, EvaluativeRunConfig};
 use crate::guidance::evaluative_trainer::EvaluativeTrainer;
 pub use crate::guidance::evaluative_trainer::NoTrainer;
-use crate::guidance::expert_oracle::{ExpertOracle, OracleRule};
+use crate::guidance::expert_oracle::ExpertOracle;
 use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::remote_env::RemoteEnv;
 use crate::rl::Sac;
@@ -58,23 +57,12 @@ pub struct TrainArgs {
     /// is one in the current directory, else the one inside the binary].
     #[arg(long)]
     pub expert: Option<PathBuf>,
-    /// The oracle's rule: authors (alpha Q*) or sign-aware.
-    #[arg(long, default_value = "authors", value_parser = parse_oracle_rule)]
-    pub oracle: OracleRule,
     /// Save the whole run to OUT/checkpoint.run about every N steps (0: never), so a stopped
     /// run resumes instead of starting over.
     #[arg(long, default_value_t = 10_000)]
     pub checkpoint_every: u64,
     #[command(flatten)]
     pub remote: RemoteArgs,
-}
-
-fn parse_oracle_rule(s: &str) -> Result<OracleRule, ArgError> {
-    match s {
-        "authors" => Ok(OracleRule::Authors),
-        "sign-aware" => Ok(OracleRule::SignAware),
-        _ => Err(ArgError::OracleRule(s.to_string())),
-    }
 }
 
 /// `summary.json`.
@@ -263,7 +251,7 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
                 None => config.make_env().spec().action_space.dim(),
             };
             Box::new(
-                ExpertOracle::new(expert, act_dim, args.oracle)
+                ExpertOracle::new(expert, act_dim)
                     .with_config(config.oracle)
                     .with_faults(config.teacher, config.seed, f64::from(config.sac.gamma)),
             )

@@ -18,7 +18,7 @@ use super::runner::{SessionContext, check_replay, halt_ending, revised};
 use super::spec::{SessionSettings, SessionSpec, TrainerKind};
 use crate::guidance::evaluative_run::{EvaluativeRun, EvaluativeRunConfig, StepReport};
 use crate::guidance::evaluative_trainer::{Evaluation, NoTrainer};
-use crate::guidance::expert_oracle::{ExpertOracle, OracleRule};
+use crate::guidance::expert_oracle::ExpertOracle;
 use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::rl::Sac;
 use crate::sim::{EnvFault, Geometry, RenderState, TaskRef};
@@ -83,17 +83,9 @@ pub(super) fn run(
                         None => config.make_env().spec().action_space.dim(),
                     };
                     Box::new(
-                        ExpertOracle::new(
-                            expert(&ctx, &config.task)?,
-                            act_dim,
-                            OracleRule::Authors,
-                        )
-                        .with_config(config.oracle)
-                        .with_faults(
-                            config.teacher,
-                            config.seed,
-                            f64::from(config.sac.gamma),
-                        ),
+                        ExpertOracle::new(expert(&ctx, &config.task)?, act_dim)
+                            .with_config(config.oracle)
+                            .with_faults(config.teacher, config.seed, f64::from(config.sac.gamma)),
                     )
                 }
             },

@@ -32,7 +32,8 @@ pub enum SceneGraphChoice {
     AsRun,
 }
 
-/// The authors' published runs (issue 33): the profile, and each of its switches on its own.
+/// The authors' published runs (issue 33): the profile, and its switches that belong to no other
+/// section (the oracle's are in `oracle`, the scene graph's and the env's in `task_version`).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(default)]
 pub struct AsRunSection {
@@ -40,12 +41,6 @@ pub struct AsRunSection {
     /// published runs ran, per task; the settings below, given, override it) [default head].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub profile: Option<Profile>,
-    /// The synthetic oracle's alpha at step 0 (it grows 1e-8 a step) [default 0.999].
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub oracle_alpha0: Option<f64>,
-    /// Factor on both actions the oracle's critic and H_hat are shown [default 1].
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub oracle_action_scale: Option<f32>,
     /// Which observation the scene graph reads on an episode's last step: `step` or `reset`
     /// [default step].
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -59,8 +54,6 @@ impl AsRunSection {
     pub(super) fn offered(c: &EvaluativeRunConfig) -> Self {
         Self {
             profile: Some(Profile::Head),
-            oracle_alpha0: Some(c.oracle.alpha0),
-            oracle_action_scale: Some(c.oracle.action_scale),
             graph_at_episode_end: Some(c.graph_at_episode_end),
             time_limit: Some(c.time_limit),
         }
@@ -78,35 +71,13 @@ impl AsRunSection {
     }
 
     /// The switches given, checked, into `config`.
-    pub(super) fn apply_switches(
-        &self,
-        config: &mut EvaluativeRunConfig,
-    ) -> Result<(), SettingsError> {
-        if let Some(a) = self.oracle_alpha0 {
-            if !(a.is_finite() && a > 0.0 && a <= 1.0) {
-                return Err(SettingsError::bad(
-                    "oracle_alpha0",
-                    format!("expected a number in (0, 1], got {a}"),
-                ));
-            }
-            config.oracle.alpha0 = a;
-        }
-        if let Some(s) = self.oracle_action_scale {
-            if !(s.is_finite() && s > 0.0) {
-                return Err(SettingsError::bad(
-                    "oracle_action_scale",
-                    format!("expected a positive number, got {s}"),
-                ));
-            }
-            config.oracle.action_scale = s;
-        }
+    pub(super) fn apply_switches(&self, config: &mut EvaluativeRunConfig) {
         if let Some(g) = self.graph_at_episode_end {
             config.graph_at_episode_end = g;
         }
         if let Some(t) = self.time_limit {
             config.time_limit = t;
         }
-        Ok(())
     }
 }
 

@@ -59,7 +59,8 @@ impl Settings {
         self.query_rule.apply(&mut config.query_rule)?;
         self.evaluative.apply(&mut config, &self.session)?;
         config.teacher = self.teacher.faults()?;
-        self.as_run.apply_switches(&mut config)?;
+        self.oracle.apply(&mut config.oracle)?;
+        self.as_run.apply_switches(&mut config);
         self.scene_graph.apply(&mut config.scene_graph)?;
         self.env.apply(&mut config.env, &config.task)?;
         Ok(config)
@@ -87,6 +88,7 @@ impl Settings {
             keys::first_set(&self.human_critic),
             keys::first_set(&self.query_rule),
             keys::first_set(&self.evaluative),
+            keys::first_set(&self.oracle),
             keys::first_set(&self.as_run),
         ];
         if let Some(key) = evaluative_only.into_iter().flatten().next() {

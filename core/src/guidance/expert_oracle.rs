@@ -23,6 +23,7 @@ use crate::rl::rng_state::RngState;
 
 /// How the oracle turns the two Q values into +1 / -1.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(utoipa::ToSchema))]
 #[serde(rename_all = "kebab-case")]
 pub enum OracleRule {
     /// `alpha * Q*(s, a*) < Q*(s, a)`, as the authors wrote it.
@@ -32,20 +33,29 @@ pub enum OracleRule {
     SignAware,
 }
 
+impl OracleRule {
+    fn is_authors(&self) -> bool {
+        *self == OracleRule::Authors
+    }
+}
+
 /// alpha's value at the start of a run and its growth per environment step \[authors\].
 pub const ALPHA_START: f64 = 0.999;
 pub const ALPHA_GROWTH_PER_STEP: f64 = 1e-8;
 
-/// What the oracle's critic is shown, beyond the rule: alpha's start, and a factor on both
-/// actions it compares. The authors' head runs 0.999 and the actions as the learner normalised
-/// them (1); their published runs differed (issue 33, `profile = "as-run"`): Lunar Lander's
-/// started alpha at 0.99, and Reaching's fed the expert's critic the env-scale actions (their
-/// robosuite arm's +-0.1 in x, y, z), so both the expert's and the learner's action reached it
-/// shrunk tenfold.
+/// How the oracle judges: alpha's start, a factor on both actions its critic compares, and the
+/// rule. The authors' head runs 0.999, the actions as the learner normalised them (1) and their
+/// rule; their published runs differed (issue 33, `profile = "as-run"`): Lunar Lander's started
+/// alpha at 0.99, and Reaching's fed the expert's critic the env-scale actions (their robosuite
+/// arm's +-0.1 in x, y, z), so both the expert's and the learner's action reached it shrunk
+/// tenfold. The rule is written only where it is not the authors', so a run's `config.json`
+/// from before it was a setting reads as the run it was.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct OracleConfig {
     pub alpha0: f64,
     pub action_scale: f32,
+    #[serde(default, skip_serializing_if = "OracleRule::is_authors")]
+    pub rule: OracleRule,
 }
 
 impl Default for OracleConfig {
@@ -53,6 +63,7 @@ impl Default for OracleConfig {
         Self {
             alpha0: ALPHA_START,
             action_scale: 1.0,
+            rule: OracleRule::Authors,
         }
     }
 }
@@ -65,7 +76,6 @@ impl OracleConfig {
 
 pub struct ExpertOracle {
     expert: Sac,
-    rule: OracleRule,
     config: OracleConfig,
     expert_action: Vec<f32>,
     /// The learner's action as the critic is shown it (scaled by `config.action_scale`).
@@ -77,10 +87,11 @@ pub struct ExpertOracle {
 }
 
 impl ExpertOracle {
-    pub fn new(expert: Sac, act_dim: usize, rule: OracleRule) -> Self {
+    /// The authors' oracle (their head's alpha start and rule); [`ExpertOracle::with_config`]
+    /// for others.
+    pub fn new(expert: Sac, act_dim: usize) -> Self {
         Self {
             expert,
-            rule,
             config: OracleConfig::default(),
             expert_action: vec![0.0; act_dim],
             shown_action: vec![0.0; act_dim],
@@ -97,7 +108,7 @@ impl ExpertOracle {
         self
     }
 
-    /// The same oracle with `config`'s alpha start and action scale.
+    /// The same oracle with `config`'s alpha start, action scale and rule.
     pub fn with_config(mut self, config: OracleConfig) -> Self {
         self.config = config;
         self
@@ -122,7 +133,7 @@ impl ExpertOracle {
         let (q_star, q) = (f64::from(q_expert), f64::from(q_learner));
         let scale = q_star.abs().max(1e-6);
         let alpha = alpha_at(self.config.alpha0, step);
-        let mut margin = (q - Self::bar(self.rule, alpha, q_star)) / scale;
+        let mut margin = (q - Self::bar(self.config.rule, alpha, q_star)) / scale;
         if let Some(gamma) = self.faults.faults().myopia() {
             let rate = (1.0 - self.discount) * q_star;
             let immediate = (f64::from(reward) - rate) / ((1.0 - self.discount) * scale);
@@ -185,7 +196,7 @@ impl EvaluativeTrainer for ExpertOracle {
         let q_learner = self.expert.q_value(query.obs, learner_action);
         if self.faults.faults().is_perfect() {
             let alpha = alpha_at(self.config.alpha0, query.step);
-            return Self::judge_with_alpha(self.rule, alpha, q_expert, q_learner);
+            return Self::judge_with_alpha(self.config.rule, alpha, q_expert, q_learner);
         }
         self.judge_with_faults(query.step, query.reward, q_expert, q_learner)
     }
@@ -300,9 +311,9 @@ mod tests {
         let as_run = OracleConfig {
             alpha0: 0.99,
             action_scale: 0.1,
+            rule: OracleRule::Authors,
         };
-        let mut oracle =
-            ExpertOracle::new(expert.clone(), 2, OracleRule::Authors).with_config(as_run);
+        let mut oracle = ExpertOracle::new(expert.clone(), 2).with_config(as_run);
         // By hand, on a copy of the expert with the same random stream: its sampled action and
         // the learner's, both times 0.1, through its critic, against alpha = 0.99 + 1e-8 step.
         let mut by_hand = expert;
@@ -335,6 +346,58 @@ mod tests {
             let got = oracle.evaluate(&query);
             assert_eq!(got, expected, "obs {obs:?}");
         }
+    }
+
+    #[test]
+    fn the_oracle_judges_by_the_rule_its_config_names() {
+        use crate::rl::SacConfig;
+        use crate::scene_graph::AbstractState;
+        use crate::sim::Task;
+        let mut config = SacConfig::for_task(Task::Reaching);
+        config.hidden = vec![16, 16];
+        let expert = Sac::new(2, 2, config, 9);
+        // alpha 0.5: the two rules part wherever Q*(s, a*) < 0 and Q(s, a) lies between 1.5 Q*
+        // and 0.5 Q*, wide enough that some of the queries below fall there.
+        let with = |rule| OracleConfig {
+            alpha0: 0.5,
+            action_scale: 1.0,
+            rule,
+        };
+        let mut authors =
+            ExpertOracle::new(expert.clone(), 2).with_config(with(OracleRule::Authors));
+        let mut sign_aware =
+            ExpertOracle::new(expert.clone(), 2).with_config(with(OracleRule::SignAware));
+        let mut by_hand = expert;
+        let mut parted = 0;
+        for i in 0..200 {
+            let t = i as f32 / 200.0;
+            let obs = [2.0 * t - 1.0, (7.0 * t).sin()];
+            let action = [(13.0 * t).cos(), (5.0 * t).sin()];
+            let mut star = [0.0f32; 2];
+            by_hand.act(&obs, false, &mut star);
+            let (q_star, q) = (by_hand.q_value(&obs, &star), by_hand.q_value(&obs, &action));
+            let query = EvaluativeQuery {
+                step: 0,
+                obs: &obs,
+                action: &action,
+                next_obs: &obs,
+                reward: 0.0,
+                terminated: false,
+                abstract_state: AbstractState(0),
+                predicted: 0.0,
+            };
+            let (a, b) = (authors.evaluate(&query), sign_aware.evaluate(&query));
+            assert_eq!(
+                a,
+                ExpertOracle::judge_with_alpha(OracleRule::Authors, 0.5, q_star, q)
+            );
+            assert_eq!(
+                b,
+                ExpertOracle::judge_with_alpha(OracleRule::SignAware, 0.5, q_star, q)
+            );
+            parted += usize::from(a != b);
+        }
+        assert!(parted > 0, "no query where the two rules part");
     }
 
     #[test]

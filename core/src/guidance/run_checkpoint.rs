@@ -293,7 +293,7 @@ fn split_blob(bytes: &[u8]) -> Option<(&[u8], &[u8])> {
 mod tests {
     use super::*;
     use crate::guidance::evaluative_run::EpisodeRecord;
-    use crate::guidance::expert_oracle::{ExpertOracle, OracleRule};
+    use crate::guidance::expert_oracle::ExpertOracle;
     use crate::sim::Task;
 
     fn tiny(task: Task, method: &str) -> EvaluativeRunConfig {
@@ -310,11 +310,7 @@ mod tests {
         let (obs_dim, act_dim) = (spec.observation_space.dim(), spec.action_space.dim());
         let mut config = crate::rl::SacConfig::for_task(task);
         config.hidden = vec![8, 8];
-        ExpertOracle::new(
-            Sac::new(obs_dim, act_dim, config, 11),
-            act_dim,
-            OracleRule::Authors,
-        )
+        ExpertOracle::new(Sac::new(obs_dim, act_dim, config, 11), act_dim)
     }
 
     fn drive(run: &mut EvaluativeRun, trainer: &mut ExpertOracle, to: u64) -> Vec<EpisodeRecord> {

@@ -16,7 +16,7 @@ use crate::guidance::drpl::run::{PreferenceRun, PreferenceRunConfig};
 use crate::guidance::drpl::simulated_teacher::SimulatedTeacher;
 use crate::guidance::evaluative_run::{EvaluativeRun, EvaluativeRunConfig};
 use crate::guidance::evaluative_trainer::{EvaluativeTrainer, NoTrainer};
-use crate::guidance::expert_oracle::{ExpertOracle, OracleRule};
+use crate::guidance::expert_oracle::ExpertOracle;
 use crate::guidance::feedback_schedule::EvaluativeMethod;
 use crate::rl::Sac;
 use crate::rl::kernels;
@@ -126,7 +126,7 @@ fn evaluative(config: EvaluativeRunConfig, steps: u64, experts: &Experts) -> Res
                 .ok_or_else(|| format!("no expert for {task}"))?;
             let act_dim = config.make_env().spec().action_space.dim();
             Box::new(
-                ExpertOracle::new(expert, act_dim, OracleRule::Authors)
+                ExpertOracle::new(expert, act_dim)
                     .with_config(config.oracle)
                     .with_faults(config.teacher, config.seed, f64::from(config.sac.gamma)),
             )
