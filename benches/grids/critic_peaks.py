@@ -20,6 +20,8 @@ import random
 import sys
 from pathlib import Path
 
+from rows import midranks
+
 STRETCH = 10_000
 SHUFFLES = 200_000
 
@@ -31,21 +33,6 @@ def peak_critic_loss(learner_csv: Path) -> float:
         for row in csv.DictReader(f):
             stretches.setdefault(int(row["step"]) // STRETCH, []).append(float(row["critic_loss"]))
     return max(sum(v) / len(v) for v in stretches.values())
-
-
-def ranks(values: list[float]) -> list[float]:
-    """Ranks from 0, ties sharing their mean rank."""
-    order = sorted(range(len(values)), key=lambda i: values[i])
-    out = [0.0] * len(values)
-    i = 0
-    while i < len(order):
-        j = i
-        while j + 1 < len(order) and values[order[j + 1]] == values[order[i]]:
-            j += 1
-        for k in range(i, j + 1):
-            out[order[k]] = (i + j) / 2
-        i = j + 1
-    return out
 
 
 def pearson(a: list[float], b: list[float]) -> float:
@@ -68,7 +55,7 @@ def main(folders: list[str]) -> None:
         sys.exit("fewer than 3 finished runs with a learner.csv")
     for peak, cumulative, name in sorted(runs):
         print(f"{peak:9.1f} {cumulative / 1000:8.1f}k  {name}")
-    peaks, sums = ranks([r[0] for r in runs]), ranks([r[1] for r in runs])
+    peaks, sums = midranks([r[0] for r in runs]), midranks([r[1] for r in runs])
     rho = pearson(peaks, sums)
     rng = random.Random(0)
     shuffled = list(sums)
