@@ -7,20 +7,19 @@ reward, and Spearman's rank correlation between the two over every run given.
         docs/results/dref-ablation/*/lunar-lander/*
 
 Every finished run (`seed<N>/summary.json`) that has a learner.csv is counted, whatever its row:
-the question is about the learner, which every row shares. The p value is a permutation test of
-rho against no association (one-sided, rho below zero), 200,000 shuffles drawn from a fixed seed,
-so it reads the same on every machine.
+the question is about the learner, which every row shares. The p value is `early_answers.py`'s
+permutation test of rho against no association (one-sided, rho below zero), 200,000 shuffles
+drawn from a fixed seed, so it reads the same on every machine.
 """
 
 from __future__ import annotations
 
 import csv
 import json
-import random
 import sys
 from pathlib import Path
 
-from rows import midranks
+from early_answers import permutation_p, spearman
 
 STRETCH = 10_000
 SHUFFLES = 200_000
@@ -35,14 +34,6 @@ def peak_critic_loss(learner_csv: Path) -> float:
     return max(sum(v) / len(v) for v in stretches.values())
 
 
-def pearson(a: list[float], b: list[float]) -> float:
-    ma, mb = sum(a) / len(a), sum(b) / len(b)
-    cov = sum((x - ma) * (y - mb) for x, y in zip(a, b))
-    va = sum((x - ma) ** 2 for x in a)
-    vb = sum((y - mb) ** 2 for y in b)
-    return cov / (va * vb) ** 0.5
-
-
 def main(folders: list[str]) -> None:
     runs = []
     for folder in folders:
@@ -55,17 +46,11 @@ def main(folders: list[str]) -> None:
         sys.exit("fewer than 3 finished runs with a learner.csv")
     for peak, cumulative, name in sorted(runs):
         print(f"{peak:9.1f} {cumulative / 1000:8.1f}k  {name}")
-    peaks, sums = midranks([r[0] for r in runs]), midranks([r[1] for r in runs])
-    rho = pearson(peaks, sums)
-    rng = random.Random(0)
-    shuffled = list(sums)
-    below = 0
-    for _ in range(SHUFFLES):
-        rng.shuffle(shuffled)
-        below += pearson(peaks, shuffled) <= rho
+    peaks, sums = [r[0] for r in runs], [r[1] for r in runs]
+    rho, p = spearman(peaks, sums), permutation_p(peaks, sums, SHUFFLES)
     print(
         f"{len(runs)} runs: Spearman rho (peak critic loss, cumulative reward) = {rho:.3f}, "
-        f"one-sided permutation p = {(below + 1) / (SHUFFLES + 1):.2g}"
+        f"one-sided permutation p = {p:.2g}"
     )
 
 
