@@ -1,7 +1,8 @@
-//! A run's CSV with one row per finished episode (`metrics.csv`, `learner.csv`,
-//! `answers.csv`): a new file, or the one an earlier call of the same run began, and (for the
-//! two beside `metrics.csv`) its cut back to a checkpoint's episodes on a resume. A run checkpoint is taken at an episode's
-//! start, so a row per episode is exact across a resume: no episode is split by it.
+//! A run's CSV with one row per finished episode (`metrics.csv`, `learner.csv`, `answers.csv`):
+//! a new file, or the one an earlier call of the same run began, and (for the two beside
+//! `metrics.csv`) its cut back to a checkpoint's episodes on a resume. A run checkpoint is taken
+//! at an episode's start, so a row per episode is exact across a resume: no episode is split by
+//! it.
 
 use std::fs::{self, File};
 use std::io::{BufWriter, Write};

@@ -237,7 +237,7 @@ pub struct EvaluativeRunConfig {
     pub time_limit: TimeLimitEnd,
 }
 
-fn is_default<T: Default + PartialEq>(value: &T) -> bool {
+pub(crate) fn is_default<T: Default + PartialEq>(value: &T) -> bool {
     *value == T::default()
 }
 

@@ -16,6 +16,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::evaluative_config::is_default;
 use super::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer, RestoreError};
 use super::teacher::{Decision, FaultyJudge, TeacherFaults};
 use crate::rl::Sac;
@@ -33,12 +34,6 @@ pub enum OracleRule {
     SignAware,
 }
 
-impl OracleRule {
-    fn is_authors(&self) -> bool {
-        *self == OracleRule::Authors
-    }
-}
-
 /// alpha's value at the start of a run and its growth per environment step \[authors\].
 pub const ALPHA_START: f64 = 0.999;
 pub const ALPHA_GROWTH_PER_STEP: f64 = 1e-8;
@@ -54,7 +49,7 @@ pub const ALPHA_GROWTH_PER_STEP: f64 = 1e-8;
 pub struct OracleConfig {
     pub alpha0: f64,
     pub action_scale: f32,
-    #[serde(default, skip_serializing_if = "OracleRule::is_authors")]
+    #[serde(default, skip_serializing_if = "is_default")]
     pub rule: OracleRule,
 }
 
