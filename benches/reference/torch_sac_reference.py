@@ -1,10 +1,12 @@
 """Reference values for `core/src/rl/sac/tests/torch_reference.rs`, computed with PyTorch.
 
 Two full SAC updates in stable-baselines3's order (`SAC.train`, which the authors' DREF fork
-uses) on tiny networks with fixed weights, a fixed batch and fixed policy noise, for three
-learners: plain SAC, DREF with the authors' head-wise mix (lambda = 9, every row), and DREF with
-the paper's Eq. 5 mix (lambda = 2, `human_critic_mask`). Prints Rust constants to paste beside
-the test.
+uses) on tiny networks with fixed weights, a fixed batch and fixed policy noise, for four
+learners: plain SAC, DREF with the authors' head-wise mix (lambda = 9, every row), DREF with
+the paper's Eq. 5 mix (lambda = 2, `human_critic_mask`), and plain SAC whose critics fit their
+targets with `F.huber_loss` (delta 1; `critic_loss = "huber"`) on rewards three times the
+formula's, so that the targets fall on both sides of the loss's seam. Prints Rust constants to
+paste beside the test.
 
     pip install torch==2.15.0   # CPU is enough
     python3 benches/reference/torch_sac_reference.py
@@ -40,11 +42,14 @@ OBS, ACT, HIDDEN, BATCH = 3, 2, [6, 5], 5
 LR, TAU, GAMMA, INIT_ENT_COEF, TARGET_ENTROPY = 0.01, 0.05, 0.99, 0.5, -2.0
 ACTOR_PROBE = [0, 17, 40, 75]
 LEARNERS = [
-    # name, human critic (lambda, mix, mask) or None
-    ("SAC", None),
-    ("AUTHORS", (9.0, "authors", False)),
-    ("PAPER", (2.0, "paper", True)),
+    # name, human critic (lambda, mix, mask) or None, the critics' loss
+    ("SAC", None, "mse"),
+    ("AUTHORS", (9.0, "authors", False), "mse"),
+    ("PAPER", (2.0, "paper", True), "mse"),
+    ("HUBER", None, "huber"),
 ]
+# The Huber learner's rewards are this times the formula's.
+HUBER_REWARD_FACTOR = 3.0
 
 
 class Mlp(torch.nn.Module):
@@ -96,7 +101,7 @@ def fingerprint(mlp):
     return float((p * torch.cos(0.37 * torch.arange(p.numel(), dtype=torch.float64))).sum())
 
 
-def run(human):
+def run(human, critic_loss_kind):
     actor = make_mlp([OBS, *HIDDEN, 2 * ACT], 0)
     q1, q2 = make_mlp([OBS + ACT, *HIDDEN, 1], 1), make_mlp([OBS + ACT, *HIDDEN, 1], 2)
     q1_target, q2_target = copy.deepcopy(q1), copy.deepcopy(q2)
@@ -116,6 +121,9 @@ def run(human):
     noise_pi = formula(BATCH * ACT, lambda k: 1.2 * math.sin(0.9 * k + 0.4)).view(BATCH, ACT)
     noise_next = formula(BATCH * ACT, lambda k: math.cos(0.8 * k + 0.1)).view(BATCH, ACT)
     rewards = formula(BATCH, lambda i: math.sin(1.1 * i + 0.5)).view(BATCH, 1)
+    if critic_loss_kind == "huber":
+        rewards = rewards * HUBER_REWARD_FACTOR
+    regress = F.huber_loss if critic_loss_kind == "huber" else F.mse_loss
     human_feedback = torch.tensor([1.0, 0.0, -1.0, 0.0, 1.0]).view(BATCH, 1)
     dones = torch.tensor([0.0, 1.0, 0.0, 0.0, 0.0]).view(BATCH, 1)
 
@@ -149,7 +157,7 @@ def run(human):
             target_q_values = rewards + (1 - dones) * GAMMA * next_q_values
 
         x = torch.cat([obs, actions], dim=1)
-        critic_loss = 0.5 * sum(F.mse_loss(q(x), target_q_values) for q in (q1, q2))
+        critic_loss = 0.5 * sum(regress(q(x), target_q_values) for q in (q1, q2))
         critic_optimizer.zero_grad()
         critic_loss.backward()
         critic_optimizer.step()
@@ -199,8 +207,8 @@ def run(human):
 def main():
     torch.set_default_dtype(torch.float32)
     print(f"// torch {torch.__version__}, benches/reference/torch_sac_reference.py")
-    for name, human in LEARNERS:
-        losses, prints, probe = run(human)
+    for name, human, critic_loss_kind in LEARNERS:
+        losses, prints, probe = run(human, critic_loss_kind)
         for step, row in enumerate(losses):
             print(rust_array(f"{name}_LOSSES_{step}", row))
         print(rust_array(f"{name}_FINGERPRINTS", prints))

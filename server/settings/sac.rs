@@ -4,7 +4,7 @@
 use serde::{Deserialize, Deserializer, Serialize};
 
 use super::SettingsError;
-use crate::rl::{ActorMix, HumanCriticConfig, SacConfig};
+use crate::rl::{ActorMix, CriticLoss, HumanCriticConfig, SacConfig};
 
 /// SAC's target entropy: SB3's `-dim(A)` ("auto") or a number.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
@@ -54,6 +54,10 @@ pub struct SacSection {
     /// `"auto"` (-dim(A)) or a number.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub target_entropy: Option<TargetEntropy>,
+    /// The env critics' loss: `mse` (SAC's and the authors') or `huber` (delta 1, our learner
+    /// variant: bounds each sample's pull on the critic).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub critic_loss: Option<CriticLoss>,
 }
 
 /// DREF's human critic.
@@ -144,6 +148,7 @@ impl SacSection {
                 sac.target_entropy
                     .map_or(TargetEntropy::Auto(AutoWord::Auto), TargetEntropy::Value),
             ),
+            critic_loss: Some(sac.critic_loss),
         }
     }
 
@@ -170,6 +175,9 @@ impl SacSection {
             sac.gradient_steps = n;
         }
         set_positive(&mut sac.init_ent_coef, self.init_ent_coef, "init_ent_coef")?;
+        if let Some(loss) = self.critic_loss {
+            sac.critic_loss = loss;
+        }
         match self.target_entropy {
             None => {}
             Some(TargetEntropy::Auto(_)) => sac.target_entropy = None,

@@ -3,8 +3,8 @@ use serde_json::json;
 use super::*;
 use crate::guidance::drpl::acquisition::Acquisition;
 use crate::guidance::query_rule::UcbForm;
-use crate::rl::ActorMix;
 use crate::rl::kernels::KernelPath;
+use crate::rl::{ActorMix, CriticLoss};
 use crate::sim::{GripObservation, HoopShape, PlacingSuccess, Variant};
 
 fn dref(task: Task, settings: &Settings) -> Result<EvaluativeRunConfig, SettingsError> {
@@ -55,6 +55,8 @@ fn unknown_keys_and_wrong_types_are_refused_by_name() {
     assert!(Settings::from_pairs([("hidden", "64,x")]).is_err());
     assert!(Settings::from_pairs([("k", "-1")]).is_err());
     assert!(Settings::from_pairs([("ucb", "best")]).is_err());
+    let e = Settings::from_pairs([("critic_loss", "l1")]).unwrap_err();
+    assert_eq!(e.key(), Some("critic_loss"), "{e}");
     assert!(Settings::from_json(json!({"trajectories": {"a": 1}})).is_err());
     assert!(Settings::from_json(json!({"variant": "robosuite"})).is_err());
 }
@@ -64,7 +66,8 @@ fn evaluative_settings_reach_the_run() {
     let s = Settings::from_json(json!({
         "hidden": [32, 32], "c": 0.5, "k": 7, "ucb": "paper", "batch_size": 64,
         "lambda": 2.0, "mix": "paper", "reward_scale": 0.1, "variant": "uniform",
-        "release_at": 0.9, "observe_grip": "level", "success": "through", "hoop": "ring"
+        "release_at": 0.9, "observe_grip": "level", "success": "through", "hoop": "ring",
+        "critic_loss": "huber"
     }))
     .unwrap();
     let c = dref(Task::Placing, &s).unwrap();
@@ -72,6 +75,7 @@ fn evaluative_settings_reach_the_run() {
     assert_eq!((c.query_rule.c, c.query_rule.k), (0.5, 7));
     assert_eq!(c.query_rule.form, UcbForm::Paper);
     assert_eq!(c.sac.batch_size, 64);
+    assert_eq!(c.sac.critic_loss, CriticLoss::Huber);
     let critic = c.sac.human_critic.unwrap();
     assert_eq!((critic.lambda, critic.mix), (2.0, ActorMix::Paper));
     assert_eq!(c.reward_scale, 0.1);

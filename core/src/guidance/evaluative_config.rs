@@ -13,7 +13,7 @@ use super::human_pace::HumanPace;
 use super::query_rule::{QueryRule, UcbForm};
 use super::teacher::TeacherFaults;
 use super::visit_share::OpeningPlacement;
-use crate::rl::{ActorMix, HumanCriticConfig, SacConfig};
+use crate::rl::{ActorMix, CriticLoss, HumanCriticConfig, SacConfig};
 use crate::scene_graph::SceneGraph;
 use crate::sim::{DeclaredTask, Env, EnvOptions, Task, TaskRef};
 
@@ -353,6 +353,7 @@ impl EvaluativeRunConfig {
             init_ent_coef: 1.0,
             target_entropy: None,
             human_critic: human_critic_for(method, ActorMix::Authors),
+            critic_loss: CriticLoss::Mse,
         };
         let query_rule = match method {
             EvaluativeMethod::Dref => QueryRuleConfig::for_declared().products(),

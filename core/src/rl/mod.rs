@@ -14,7 +14,7 @@
 //!   same bits everywhere) or our own AVX-512 / AVX2 kernels chosen at run time, on one or more
 //!   threads.
 //! - [`adam`]: [`Adam`] with PyTorch's defaults and arithmetic.
-//! - [`loss`]: [`mse_loss`] with its gradient.
+//! - [`loss`]: [`mse_loss`] and the critics' other losses, with their gradients.
 //! - [`squashed_gaussian`]: SAC's tanh-squashed Gaussian policy head: sampling, log-prob
 //!   with the tanh correction, and its gradient.
 //! - [`replay`]: the preallocated replay buffer, `(s, a, r, H, s', terminated)` per row, and
@@ -103,5 +103,7 @@ pub use adam::{Adam, AdamConfig};
 pub use linear::Linear;
 pub use loss::mse_loss;
 pub use mlp::{Mlp, ParamTensor};
-pub use sac::{ActorMix, CheckpointError, HumanCriticConfig, Sac, SacConfig, UpdateStats};
+pub use sac::{
+    ActorMix, CheckpointError, CriticLoss, HumanCriticConfig, Sac, SacConfig, UpdateStats,
+};
 pub use workspace::MlpWorkspace;

@@ -28,6 +28,33 @@ pub struct SacConfig {
     pub target_entropy: Option<f32>,
     /// DREF's human critic H(s, a); `None` is plain SAC.
     pub human_critic: Option<HumanCriticConfig>,
+    /// How the environment critics fit their targets. Left out of a run's config while mse,
+    /// so earlier configs read as they were.
+    #[serde(default, skip_serializing_if = "CriticLoss::is_mse")]
+    pub critic_loss: CriticLoss,
+}
+
+/// The loss the environment critics Q_1, Q_2 regress their soft Bellman targets with (Eq. 4).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "schema", derive(utoipa::ToSchema))]
+#[serde(rename_all = "snake_case")]
+pub enum CriticLoss {
+    /// Mean squared error: stable-baselines3's SAC and the authors'.
+    #[default]
+    Mse,
+    /// Our choice (the setting `critic_loss = "huber"`), a learner of its own: the Huber loss
+    /// at delta 1 (PyTorch's `F.huber_loss`, the loss SB3's DQN fits its Q with). On Lunar
+    /// Lander the runs that end lowest are the ones whose env critic's loss ran away (up to
+    /// 2,000 against 10-100 on the runs that land; docs/dref.md, "What decides a Lunar Lander
+    /// run"), which no query rule reaches; Huber bounds each sample's pull on the critic, so
+    /// a crash's -100 or a target that ran ahead moves it no more than any sample off by 1.
+    Huber,
+}
+
+impl CriticLoss {
+    fn is_mse(&self) -> bool {
+        *self == Self::Mse
+    }
 }
 
 /// DREF's human critic: twin heads regressed on the immediate feedback H (Eq. 3) and mixed into
@@ -160,6 +187,7 @@ impl SacConfig {
             init_ent_coef: 1.0,
             target_entropy: None,
             human_critic: Some(HumanCriticConfig::default()),
+            critic_loss: CriticLoss::Mse,
         }
     }
 }

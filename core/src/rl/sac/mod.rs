@@ -34,7 +34,7 @@ use super::{Adam, AdamConfig, Mlp, MlpWorkspace};
 use buffers::{StepBuffers, fill_critic_input};
 
 pub use checkpoint::CheckpointError;
-pub use config::{ActorMix, HumanCriticConfig, SacConfig};
+pub use config::{ActorMix, CriticLoss, HumanCriticConfig, SacConfig};
 pub use flops::{mflop_per_update, mflop_skipped_per_update};
 
 /// Losses and temperature of an update, averaged over its gradient steps.

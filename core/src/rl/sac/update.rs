@@ -19,12 +19,12 @@
 //! product between the threads; the results are the same bits as one after the other.
 
 use crate::rl::kernels::side_by_side;
-use crate::rl::mse_loss;
+use crate::rl::loss::Regression;
 use crate::rl::squashed_gaussian;
 use crate::rl::{Mlp, MlpWorkspace};
 
 use super::buffers::{TwinPicks, fill_critic_input};
-use super::config::ActorMix;
+use super::config::{ActorMix, CriticLoss};
 use super::{HumanCritic, Sac, UpdateStats};
 
 impl Sac {
@@ -123,13 +123,18 @@ impl Sac {
         }
     }
 
-    /// Step 4 (Eq. 4): `0.5 sum_j mse(Q_j(s, a), y)`; overwrites both critics' gradients.
+    /// Step 4 (Eq. 4): `0.5 sum_j mse(Q_j(s, a), y)` (with `critic_loss = huber`, the Huber
+    /// loss in place of mse); overwrites both critics' gradients.
     pub(super) fn critic_loss(&mut self) -> f32 {
         let b = &mut self.buffers;
         let (batch, target) = (&b.batch, &b.target_q_values);
+        let regression = match self.config.critic_loss {
+            CriticLoss::Mse => Regression::Mse,
+            CriticLoss::Huber => Regression::Huber,
+        };
         let loss = |q: &mut Mlp, ws: &mut MlpWorkspace| {
             fill_critic_input(ws, &batch.obs, &batch.actions);
-            regress(q, ws, target, None)
+            regress(q, ws, target, regression)
         };
         let (q1_ws, q2_ws) = (&mut b.q1_ws, &mut b.q2_ws);
         let (q1, q2) = (&mut self.q1, &mut self.q2);
@@ -160,13 +165,14 @@ impl Sac {
             .as_ref()
             .filter(|c| c.mask)
             .map(|c| c.anchor);
+        let regression = mask.map_or(Regression::Mse, Regression::AnchoredMse);
         if mask == Some(0.0) && batch.human.iter().all(|&h| h == 0.0) {
             return None;
         }
         let HumanCritic { h1, h2, .. } = hc;
         let loss = |h: &mut Mlp, ws: &mut MlpWorkspace| {
             fill_critic_input(ws, &batch.obs, &batch.actions);
-            regress(h, ws, &batch.human, mask)
+            regress(h, ws, &batch.human, regression)
         };
         let losses = side_by_side(|| loss(h1, h1_ws), || loss(h2, h2_ws));
         Some(sum_of_halves(losses))
@@ -375,48 +381,19 @@ fn sum_of_halves((first, second): (f32, f32)) -> f32 {
     sum
 }
 
-/// `mse(net(input), target)` (with `masked = Some(anchor)`: over the rows where `target != 0`,
-/// plus `anchor` times the mean squared output over the others), scaled by 0.5 in the gradient
-/// (SB3's `0.5 * sum_j` over twins): zero the net's gradient, forward, backward. Returns the
-/// unscaled loss.
-fn regress(net: &mut Mlp, ws: &mut MlpWorkspace, target: &[f32], masked: Option<f32>) -> f32 {
+/// `regression`'s loss of `net(input)` against `target`, scaled by 0.5 in the gradient (SB3's
+/// `0.5 * sum_j` over twins): zero the net's gradient, forward, backward. Returns the unscaled
+/// loss.
+fn regress(net: &mut Mlp, ws: &mut MlpWorkspace, target: &[f32], regression: Regression) -> f32 {
     net.zero_grad();
     net.forward(ws);
     let (prediction, grad) = ws.output_and_grad_mut();
-    let (prediction, grad) = (prediction.as_slice(), grad.as_mut_slice());
-    let loss = match masked {
-        None => mse_loss(prediction, target, grad),
-        Some(anchor) => anchored_mse_loss(prediction, target, anchor, grad),
-    };
-    for g in grad.iter_mut() {
+    let loss = regression.loss(prediction.as_slice(), target, grad.as_mut_slice());
+    for g in grad.as_mut_slice().iter_mut() {
         *g *= 0.5;
     }
     net.backward(ws);
     loss
-}
-
-/// `mse` over the answered rows (`target != 0`) plus `anchor` times the mean of `prediction^2`
-/// over the others: each group is a mean of its own, so answers keep their weight however few
-/// they are. With `anchor = 0` the unanswered rows get no gradient (the plain mask). A group
-/// with no rows adds nothing; the caller ensures the loss has at least one row.
-fn anchored_mse_loss(prediction: &[f32], target: &[f32], anchor: f32, grad: &mut [f32]) -> f32 {
-    let answered = target.iter().filter(|&&y| y != 0.0).count();
-    let silent = target.len() - answered;
-    let (mut answered_sum, mut silent_sum) = (0.0f64, 0.0f64);
-    for ((g, &p), &y) in grad.iter_mut().zip(prediction).zip(target) {
-        if y != 0.0 {
-            let diff = p - y;
-            answered_sum += f64::from(diff) * f64::from(diff);
-            *g = 2.0 * diff / answered as f32;
-        } else if anchor > 0.0 {
-            silent_sum += f64::from(p) * f64::from(p);
-            *g = anchor * 2.0 * p / silent as f32;
-        } else {
-            *g = 0.0;
-        }
-    }
-    let mean = |sum: f64, n: usize| if n == 0 { 0.0 } else { sum / n as f64 };
-    (mean(answered_sum, answered) + f64::from(anchor) * mean(silent_sum, silent)) as f32
 }
 
 /// `dl_da += ` the action rows of a twin pair's input gradients through the samples each head

@@ -7,7 +7,7 @@
 
 use super::{fill_fixed_batch_and_noise, tiny_config};
 use crate::rl::sac::update::{mix_weights, temperature_loss};
-use crate::rl::sac::{ActorMix, HumanCriticConfig, Sac};
+use crate::rl::sac::{ActorMix, CriticLoss, HumanCriticConfig, Sac};
 
 const STEP: f32 = 1e-3;
 const TOLERANCE: f64 = 2e-3;
@@ -78,6 +78,41 @@ fn critic_loss_gradient() {
     check("critic loss, q2", &mut sac, Q2, &g2, &mut |s| {
         s.critic_loss()
     });
+}
+
+#[test]
+fn huber_critic_loss_gradient() {
+    let mut sac = tiny(None);
+    sac.config.critic_loss = CriticLoss::Huber;
+    // Rewards three times the fixture's, so targets fall on both sides of the loss's seam.
+    for r in &mut sac.buffers.batch.rewards {
+        *r *= 3.0;
+    }
+    sac.compute_target_q_values(ENT_COEF);
+    let huber = sac.critic_loss();
+    let (g1, g2) = (sac.q1.grads().to_vec(), sac.q2.grads().to_vec());
+    let off = |s: &Sac| {
+        let q = s.buffers.q1_ws.output().as_slice();
+        let y = &s.buffers.target_q_values;
+        q.iter()
+            .zip(y)
+            .map(|(q, y)| (q - y).abs())
+            .collect::<Vec<_>>()
+    };
+    let diffs = off(&sac);
+    assert!(
+        diffs.iter().any(|&d| d < 0.9) && diffs.iter().any(|&d| d > 1.1),
+        "both branches of the Huber loss: {diffs:?}"
+    );
+    check("huber critic loss, q1", &mut sac, Q1, &g1, &mut |s| {
+        s.critic_loss()
+    });
+    check("huber critic loss, q2", &mut sac, Q2, &g2, &mut |s| {
+        s.critic_loss()
+    });
+    // Below the mse of the same batch: each sample off by more than 1 counts |d| - 0.5, not d^2.
+    sac.config.critic_loss = CriticLoss::Mse;
+    assert!(huber < 0.5 * sac.critic_loss());
 }
 
 fn human_critic_case(mask: bool) {

@@ -7,7 +7,7 @@ mod target;
 mod threads;
 mod torch_reference;
 
-use super::{HumanCriticConfig, Sac, SacConfig};
+use super::{CriticLoss, HumanCriticConfig, Sac, SacConfig};
 
 /// Tiny hyper-parameters for tests: `hidden`, batch `batch`, the rest SB3-like.
 fn tiny_config(hidden: &[usize], batch: usize, human: Option<HumanCriticConfig>) -> SacConfig {
@@ -23,6 +23,7 @@ fn tiny_config(hidden: &[usize], batch: usize, human: Option<HumanCriticConfig>)
         init_ent_coef: 0.5,
         target_entropy: Some(-2.0),
         human_critic: human,
+        critic_loss: CriticLoss::Mse,
     }
 }
 

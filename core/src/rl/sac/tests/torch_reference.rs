@@ -3,7 +3,7 @@
 
 use super::{fill, fill_fixed_batch_and_noise, tiny_config};
 use crate::rl::Mlp;
-use crate::rl::sac::{ActorMix, HumanCriticConfig, Sac, UpdateStats};
+use crate::rl::sac::{ActorMix, CriticLoss, HumanCriticConfig, Sac, UpdateStats};
 
 // torch 2.15.0+cu132, benches/reference/torch_sac_reference.py
 const SAC_LOSSES_0: [f32; 5] = [0.8060646, 0.0, -0.33957392, 0.5, -1.8509042];
@@ -38,6 +38,21 @@ const PAPER_FINGERPRINTS: [f32; 8] = [
     0.35965985, 0.8586536, 0.69939584, 0.86071146, 0.68590385, 0.07957399, -0.5555318, -0.7131564,
 ];
 const PAPER_ACTOR_PROBE: [f32; 4] = [0.06991759, -0.121809766, 0.4827133, -0.12454332];
+const HUBER_LOSSES_0: [f32; 5] = [1.7055526, 0.0, -0.3462461, 0.5, -1.8509042];
+const HUBER_LOSSES_1: [f32; 5] = [1.6793151, 0.0, -0.44156304, 0.49502492, -1.9648921];
+const HUBER_FINGERPRINTS: [f32; 8] = [
+    0.37392884,
+    0.82584167,
+    0.69921327,
+    0.85791767,
+    0.68606573,
+    0.0,
+    0.0,
+    -0.71315646,
+];
+const HUBER_ACTOR_PROBE: [f32; 4] = [0.069905914, -0.12194824, 0.4827133, -0.124544784];
+/// The Huber learner's rewards are this times the fixture's (the script's `HUBER_REWARD_FACTOR`).
+const HUBER_REWARD_FACTOR: f32 = 3.0;
 const ACTOR_PROBE: [usize; 4] = [0, 17, 40, 75];
 
 /// The reference learner: obs 3, act 2, hidden [6, 5], batch 5, weights by formula.
@@ -81,13 +96,7 @@ fn close(name: &str, got: f64, want: f64, scale: f64, tolerance: f64) -> f64 {
     err
 }
 
-fn check(
-    human: Option<HumanCriticConfig>,
-    losses: [[f32; 5]; 2],
-    prints: [f32; 8],
-    probe: [f32; 4],
-) -> f64 {
-    let mut sac = reference_sac(human);
+fn check(mut sac: Sac, losses: [[f32; 5]; 2], prints: [f32; 8], probe: [f32; 4]) -> f64 {
     let mut worst = 0.0f64;
     for (step, want) in losses.iter().enumerate() {
         let s: UpdateStats = sac.gradient_step();
@@ -151,7 +160,7 @@ fn check(
 fn plain_sac_agrees_with_pytorch() {
     crate::rl::kernels::on_every_path(|path| {
         let worst = check(
-            None,
+            reference_sac(None),
             [SAC_LOSSES_0, SAC_LOSSES_1],
             SAC_FINGERPRINTS,
             SAC_ACTOR_PROBE,
@@ -176,7 +185,7 @@ fn dref_with_the_authors_mix_agrees_with_pytorch() {
             answer_replay: false,
         };
         let worst = check(
-            Some(human),
+            reference_sac(Some(human)),
             [AUTHORS_LOSSES_0, AUTHORS_LOSSES_1],
             AUTHORS_FINGERPRINTS,
             AUTHORS_ACTOR_PROBE,
@@ -201,11 +210,29 @@ fn dref_with_the_paper_mix_and_mask_agrees_with_pytorch() {
             answer_replay: false,
         };
         let worst = check(
-            Some(human),
+            reference_sac(Some(human)),
             [PAPER_LOSSES_0, PAPER_LOSSES_1],
             PAPER_FINGERPRINTS,
             PAPER_ACTOR_PROBE,
         );
         eprintln!("{path}: paper's mix, masked: worst relative error {worst:.2e}");
+    });
+}
+
+#[test]
+fn sac_with_the_huber_critic_loss_agrees_with_pytorch() {
+    crate::rl::kernels::on_every_path(|path| {
+        let mut sac = reference_sac(None);
+        sac.config.critic_loss = CriticLoss::Huber;
+        for r in &mut sac.buffers.batch.rewards {
+            *r *= HUBER_REWARD_FACTOR;
+        }
+        let worst = check(
+            sac,
+            [HUBER_LOSSES_0, HUBER_LOSSES_1],
+            HUBER_FINGERPRINTS,
+            HUBER_ACTOR_PROBE,
+        );
+        eprintln!("{path}: SAC, Huber critic loss: worst relative error {worst:.2e}");
     });
 }
