@@ -7,7 +7,8 @@ reward, and Spearman's rank correlation between the two over every run given.
         docs/results/dref-ablation/*/lunar-lander/*
 
 Every finished run (`seed<N>/summary.json`) that has a learner.csv is counted, whatever its row:
-the question is about the learner, which every row shares. The p value is `early_answers.py`'s
+the question is about the learner, which every row shares. Runs whose critics fit with the Huber
+loss (`critic_loss = "huber"` in config.json) log another quantity and are left out, by name. The p value is `early_answers.py`'s
 permutation test of rho against no association (one-sided, rho below zero), 200,000 shuffles
 drawn from a fixed seed, so it reads the same on every machine.
 """
@@ -40,6 +41,10 @@ def main(folders: list[str]) -> None:
         for seed_dir in sorted(Path(folder).glob("seed*")):
             summary, learner = seed_dir / "summary.json", seed_dir / "learner.csv"
             if summary.exists() and learner.exists():
+                config = json.loads((seed_dir / "config.json").read_text())
+                if config.get("sac", {}).get("critic_loss", "mse") != "mse":
+                    print(f"left out (critic loss {config['sac']['critic_loss']}): {seed_dir}")
+                    continue
                 cumulative = json.loads(summary.read_text())["cumulative_return"]
                 runs.append((peak_critic_loss(learner), cumulative, str(seed_dir)))
     if len(runs) < 3:
