@@ -7,13 +7,7 @@
 /// The sum is accumulated in f64 so the reported loss does not depend on the batch order.
 /// Scale `grad` afterwards for a weighted loss (SB3's critic loss is `0.5 * sum_j mse(q_j, y)`).
 pub fn mse_loss(prediction: &[f32], target: &[f32], grad: &mut [f32]) -> f32 {
-    assert!(
-        prediction.len() == target.len() && grad.len() == target.len() && !target.is_empty(),
-        "mse_loss: {} predictions, {} targets, {} gradient slots",
-        prediction.len(),
-        target.len(),
-        grad.len()
-    );
+    check_lengths("mse_loss", prediction, target, grad);
     let n = target.len() as f32;
     let mut sum = 0.0f64;
     for ((g, &p), &y) in grad.iter_mut().zip(prediction).zip(target) {
@@ -22,6 +16,17 @@ pub fn mse_loss(prediction: &[f32], target: &[f32], grad: &mut [f32]) -> f32 {
         *g = 2.0 * diff / n;
     }
     (sum / target.len() as f64) as f32
+}
+
+/// One prediction and one gradient slot per target, and at least one target.
+fn check_lengths(loss: &str, prediction: &[f32], target: &[f32], grad: &[f32]) {
+    assert!(
+        prediction.len() == target.len() && grad.len() == target.len() && !target.is_empty(),
+        "{loss}: {} predictions, {} targets, {} gradient slots",
+        prediction.len(),
+        target.len(),
+        grad.len()
+    );
 }
 
 /// Huber loss `L = mean(h(prediction - target))`, `h(d) = 0.5 d^2` where `|d| <= 1` and
@@ -33,13 +38,7 @@ pub fn mse_loss(prediction: &[f32], target: &[f32], grad: &mut [f32]) -> f32 {
 /// -100 on Lunar Lander, or a target network that ran ahead) moves the critic as much as any
 /// other sample that is off by more than 1, not in proportion to how far off it is.
 pub fn huber_loss(prediction: &[f32], target: &[f32], grad: &mut [f32]) -> f32 {
-    assert!(
-        prediction.len() == target.len() && grad.len() == target.len() && !target.is_empty(),
-        "huber_loss: {} predictions, {} targets, {} gradient slots",
-        prediction.len(),
-        target.len(),
-        grad.len()
-    );
+    check_lengths("huber_loss", prediction, target, grad);
     let n = target.len() as f32;
     let mut sum = 0.0f64;
     for ((g, &p), &y) in grad.iter_mut().zip(prediction).zip(target) {
