@@ -41,24 +41,25 @@ def seed_ratio(value: float, ef100: float) -> str:
 
 
 def lunar_rows(results: Path) -> list[str]:
-    """Folders under `results` whose runs are 150k-step Lunar Lander runs."""
-    found = set()
-    for summary in results.glob("**/seed*/summary.json"):
-        folder = summary.parent.parent
-        rel = folder.relative_to(results).as_posix()
-        if "lunar-lander" not in rel or "probes" in rel:
-            continue
-        found.add(rel)
-    rows = []
-    for rel in sorted(found):
-        summaries = [json.loads(p.read_text()) for p in (results / rel).glob("seed*/summary.json")]
-        if all(
-            s.get("steps") == 150_000 and s.get("task") == "lunar-lander" and "feedback_fraction" in s
-            and not s["method"].startswith("drpl")
-            for s in summaries
-        ):
-            rows.append(rel)
-    return rows
+    """Folders under `results` whose runs are all 150k-step evaluative Lunar Lander runs."""
+    by_folder: dict[str, list[dict]] = {}
+    for path in results.glob("**/seed*/summary.json"):
+        rel = path.parent.parent.relative_to(results).as_posix()
+        if "lunar-lander" in rel and "probes" not in rel:
+            by_folder.setdefault(rel, []).append(json.loads(path.read_text()))
+    return sorted(
+        rel for rel, summaries in by_folder.items() if all(map(evaluative_150k, summaries))
+    )
+
+
+def evaluative_150k(summary: dict) -> bool:
+    """A 150k-step Lunar Lander run with a feedback share (DREF, EF, SAC; not DRPL's)."""
+    return (
+        summary.get("steps") == 150_000
+        and summary.get("task") == "lunar-lander"
+        and "feedback_fraction" in summary
+        and not summary["method"].startswith("drpl")
+    )
 
 
 def main() -> None:
