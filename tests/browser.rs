@@ -198,6 +198,11 @@ fn trainer_recovers_the_pending_query_after_a_dropped_socket() {
 }
 
 #[test]
+fn trainer_page_sends_a_rate_limited_answer_again_after_the_wait() {
+    browser_test("rate_limited.mjs", &[]);
+}
+
+#[test]
 fn two_named_trainers_answer_each_query_and_the_review_shows_their_agreement() {
     browser_test("two_trainers.mjs", &[]);
 }

@@ -176,6 +176,13 @@ function answer(value) {
   setState("saving");
 }
 
+/** Sends query `q`'s answer again after `ms`, unless it was settled meanwhile. */
+function resendLater(q, ms) {
+  setTimeout(() => {
+    if (page.query === q && q.sent && !page.ended) page.socket.send({ type: "answer", id: q.msg.id, value: q.value });
+  }, ms ?? 250);
+}
+
 function reenable() {
   if (!page.query) return;
   page.query.sent = false;
@@ -335,8 +342,16 @@ function onError(msg) {
       $("name").focus();
       notify(msg.message, { kind: "info" });
       return;
-    case "store_failed":
     case "rate_limited":
+      // The server took nothing and said when to send again: the person has answered, so the
+      // page sends the same answer then instead of asking them twice.
+      if (mine && page.query.sent) {
+        resendLater(page.query, msg.retry_after_ms);
+        return;
+      }
+      notify(`${msg.message} Please try again.`, { kind: "error" });
+      return;
+    case "store_failed":
       if (mine) reenable();
       notify(`${msg.message} Please answer again.`, { kind: "error" });
       return;
