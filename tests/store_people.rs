@@ -12,6 +12,7 @@ on_both!(
     trainers_votes_and_surveys_keep_their_order_and_replace_in_place,
     a_study_numbers_its_participants_and_keeps_the_first_survey,
     the_queue_ahead_of_a_session_counts_earlier_queued_ones,
+    surveys_commit_while_sessions_change_status_at_the_same_moment,
 );
 
 /// Times are the server's RFC 3339 text on either database, and the spans read from them.
@@ -235,6 +236,64 @@ async fn a_study_numbers_its_participants_and_keeps_the_first_survey(store: Stor
         .collect();
     assert_eq!(questions, ["B", "a_z", "az", "b"]);
     assert_eq!(store.answered_positions("p0").await.unwrap(), [0]);
+}
+
+/// A participant's survey is stored while sessions start and end around it: on SQLite a
+/// status change written beside the writer connection (as `set_status` once was, through a
+/// reader) invalidates the survey's read-then-insert and fails it with "database is locked"
+/// (SQLITE_BUSY_SNAPSHOT, which no busy timeout waits out), and the study page shows a 500.
+async fn surveys_commit_while_sessions_change_status_at_the_same_moment(store: Store) {
+    use dualrep::store::SurveyOutcome;
+    let store = store_with_session(store, "s1").await;
+    let spec = serde_json::json!({"title": "t"});
+    store.insert_study("st1", "t", &spec, "link").await.unwrap();
+    const PEOPLE: usize = 60;
+    for i in 0..PEOPLE {
+        store
+            .add_participant("st1", &format!("p{i}"), &format!("tok{i}"), |_| {
+                vec!["c0".into()]
+            })
+            .await
+            .unwrap();
+    }
+    let answers: Vec<(String, i64)> = ["E", "L", "T"].map(|q| (q.to_string(), 3)).into();
+    let statuses = {
+        let store = store.clone();
+        tokio::spawn(async move {
+            for k in 0..(PEOPLE * 8) {
+                let status = if k % 2 == 0 {
+                    Status::Running
+                } else {
+                    Status::Waiting
+                };
+                store.set_status("s1", status, None).await?;
+            }
+            anyhow::Ok(())
+        })
+    };
+    let surveys: Vec<_> = (0..PEOPLE)
+        .map(|i| {
+            let (store, answers) = (store.clone(), answers.clone());
+            tokio::spawn(
+                async move { store.save_study_survey(&format!("p{i}"), 0, &answers).await },
+            )
+        })
+        .collect();
+    for (i, survey) in surveys.into_iter().enumerate() {
+        let outcome = survey.await.unwrap();
+        assert!(
+            matches!(outcome, Ok(SurveyOutcome::Stored)),
+            "participant {i}'s survey: {outcome:?}"
+        );
+    }
+    statuses
+        .await
+        .unwrap()
+        .expect("every status change commits");
+    assert_eq!(
+        store.study_answers("st1").await.unwrap().len(),
+        PEOPLE * answers.len()
+    );
 }
 
 /// A participant's page says how many sessions wait before theirs: the queued ones launched

@@ -90,9 +90,12 @@ impl Db {
             .max_connections(1)
             .connect_with(options.clone())
             .await?;
+        // Read-only: a write sent to a reader by mistake fails at once ("attempt to write a
+        // readonly database") instead of racing the writer, which it would fail with "database
+        // is locked" now and then (a read-then-write transaction whose snapshot it moved).
         let reader = SqlitePoolOptions::new()
             .max_connections(SQLITE_READERS)
-            .connect_with(options)
+            .connect_with(options.create_if_missing(false).read_only(true))
             .await?;
         Ok(Db::Sqlite { reader, writer })
     }

@@ -217,7 +217,7 @@ impl Store {
         };
         // PostgreSQL takes exactly as many arguments as the statement has placeholders.
         let stamp = (!matches!(status, Status::Queued | Status::Waiting)).then(clock::now);
-        on_db!(self.db, reader, |pool| {
+        on_db!(self.db, writer, |pool| {
             let mut query = sqlx::query(sql).bind(status).bind(reason).bind(id);
             if let Some(now) = &stamp {
                 query = query.bind(now);

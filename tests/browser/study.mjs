@@ -35,7 +35,13 @@ function barrier(n) {
 }
 
 async function step(page, name, timeout = 60_000) {
-  await page.waitForFunction((s) => document.body.dataset.step === s, name, { timeout });
+  try {
+    await page.waitForFunction((s) => document.body.dataset.step === s, name, { timeout });
+  } catch (e) {
+    // Say where the page is instead, and what it told the person (a refused request's message).
+    const at = await page.evaluate(() => ({ step: document.body.dataset.step, messages: [...document.querySelectorAll("#messages .message")].map((m) => m.textContent) }));
+    throw new Error(`waiting for the step ${name}: the page is at ${at.step}, showing ${JSON.stringify(at.messages)}; page errors ${JSON.stringify(page.errors)}\n${e.message}`);
+  }
 }
 
 async function participantView(link, token) {
