@@ -16,7 +16,10 @@
 //!   REPLACE`), `RETURNING`, `COUNT(*) FILTER (WHERE ...)` (never `SUM` of a comparison);
 //! - JSON columns are text, read in Rust (never `json_extract`);
 //! - a read-then-write transaction starts with the `UPDATE` that locks its row (PostgreSQL has
-//!   no single writer; SQLite's writer connection orders them anyway).
+//!   no single writer; SQLite's writer connection orders them anyway);
+//! - every write goes through `on_db!(.., writer, ..)`: on SQLite the readers are opened
+//!   read-only, so a write sent to one fails at once rather than, now and then, failing the
+//!   writer's transaction with "database is locked".
 //!
 //! The schemas differ only where the types must: `INTEGER PRIMARY KEY AUTOINCREMENT` is an
 //! identity column, `INTEGER` is `BIGINT` (what `i64` binds as), `REAL` is `DOUBLE PRECISION`,
