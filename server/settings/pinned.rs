@@ -265,12 +265,16 @@ fn write_fixtures() {
 /// Figure 3's `dref` rows must be runs of the rule `dref` ships: every committed seed's
 /// `config.json` is what `train --method dref --seed S` writes today. A change to the default
 /// that leaves them behind fails here until the rows are moved away and re-run (docs/dref.md);
-/// seeds still running are absent, but each row has seed 0.
+/// seeds still running are absent, but each row has seed 0. Lunar Lander's row is its 150k grid.
 #[test]
 fn figure_3s_dref_rows_are_runs_of_todays_default() {
-    let results = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/results/fig3");
-    for task in [Task::Reaching, Task::Placing] {
-        let row = results.join(format!("{}/dref", task.id()));
+    let results = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/results");
+    for (task, grid) in [
+        (Task::Reaching, "fig3"),
+        (Task::Placing, "fig3"),
+        (Task::LunarLander, "fig3-lunar-lander-150k"),
+    ] {
+        let row = results.join(format!("{grid}/{}/dref", task.id()));
         assert!(row.join("seed0/config.json").exists(), "{}", row.display());
         for seed in 0..10 {
             let path = row.join(format!("seed{seed}/config.json"));

@@ -3,6 +3,7 @@
 
 use super::*;
 use crate::guidance::evaluative_run::{DEFAULT_CEILING, FeedbackCeiling};
+use crate::guidance::visit_share::OpeningPlacement;
 use crate::rl::ActorMix;
 
 #[test]
@@ -27,21 +28,40 @@ fn the_products_dref_and_the_authors_differ_only_in_their_switches() {
             ActorMix::Authors
         );
         // The authors' ranking (no window), woken after 1,000 silent steps, under a 10 %
-        // ceiling that opens with 2,000 steps of the authors' asking, starts empty and repays
-        // the opening from 90 % of its earnings.
+        // ceiling that starts empty and repays its opening from 90 % of its earnings. The
+        // opening is 2,000 steps of the authors' asking, but on Lunar Lander, whose learner
+        // takes off only with thousands of early answers: 30,000 steps asked at 0.45 of each
+        // abstract state's visits.
         assert_eq!(
             (dref.query_rule.rank_window, dref.query_rule.wake_after),
             (0, 1000)
         );
+        let (opening, opening_rate, placement) = match task {
+            Task::LunarLander => (30_000, Some(0.45), OpeningPlacement::ByVisits),
+            _ => (2_000, None, OpeningPlacement::Ranked),
+        };
         assert_eq!(
             dref.query_rule.ceiling.map(|c| (
                 c.rate,
                 c.burst,
                 c.opening,
                 c.start_empty,
-                c.repay_share
+                c.repay_share,
+                c.opening_rate,
+                c.opening_placement,
+                c.repayment_placement,
             )),
-            Some((0.1, 20, 2000, true, 0.9))
+            Some((
+                0.1,
+                20,
+                opening,
+                true,
+                0.9,
+                opening_rate,
+                placement,
+                OpeningPlacement::Ranked
+            )),
+            "{task:?}"
         );
         assert_eq!(
             (authors.query_rule.ceiling, authors.query_rule.wake_after),

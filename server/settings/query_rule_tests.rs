@@ -133,7 +133,8 @@ fn the_openings_accounting_is_two_settings_of_the_ceiling_on_for_dref_only() {
 
 #[test]
 fn a_paced_opening_needs_an_opening_and_a_share_of_its_steps() {
-    let rule = |pairs: &[(&str, &str)], method| ceiling(Task::LunarLander, pairs, method);
+    // Placing: its product opening is unpaced (Lunar Lander's is paced and placed by visits).
+    let rule = |pairs: &[(&str, &str)], method| ceiling(Task::Placing, pairs, method);
     let product = rule(&[], EvaluativeMethod::Dref).unwrap().unwrap();
     assert_eq!(product.opening_rate, None, "off by default");
     let paced = rule(
@@ -178,7 +179,8 @@ fn a_paced_opening_needs_an_opening_and_a_share_of_its_steps() {
 
 #[test]
 fn a_placement_by_visits_needs_a_paced_opening() {
-    let rule = |pairs: &[(&str, &str)], method| ceiling(Task::LunarLander, pairs, method);
+    // Placing: its product opening is unpaced (Lunar Lander's is paced and placed by visits).
+    let rule = |pairs: &[(&str, &str)], method| ceiling(Task::Placing, pairs, method);
     let product = rule(&[], EvaluativeMethod::Dref).unwrap().unwrap();
     assert_eq!(product.opening_placement, OpeningPlacement::Ranked);
     let paced = [
