@@ -135,6 +135,28 @@ pub const LUNAR_LANDER_OPENING: u64 = 30_000;
 /// repaid by about 150k steps so a run stays near 9 % of its steps.
 pub const LUNAR_LANDER_OPENING_RATE: f64 = 0.45;
 
+/// The product's opening on `task`, a per-task constant as c and k are: the authors' asking for
+/// the run's first [`DEFAULT_OPENING`] steps (their first answers are what teach Placing's learner
+/// the way), but on Lunar Lander, whose learner takes off only with some thousands of answers in
+/// its first 30k steps (EF-100 takes off at 9-31k steps; the 2,000-step opening gave 935-1,306
+/// answers by 15k and no seed of five learnt), [`LUNAR_LANDER_OPENING`] steps asked at
+/// [`LUNAR_LANDER_OPENING_RATE`] of each abstract state's own visits (docs/dref.md, "Lunar
+/// Lander's opening").
+fn products_opening(task: Task) -> FeedbackCeiling {
+    match task {
+        Task::LunarLander => FeedbackCeiling {
+            opening: LUNAR_LANDER_OPENING,
+            opening_rate: Some(LUNAR_LANDER_OPENING_RATE),
+            opening_placement: OpeningPlacement::ByVisits,
+            ..DEFAULT_CEILING
+        },
+        Task::Reaching | Task::Placing => FeedbackCeiling {
+            opening: DEFAULT_OPENING,
+            ..DEFAULT_CEILING
+        },
+    }
+}
+
 impl QueryRuleConfig {
     /// The authors' rule on `task` (algorithms.md section 2).
     pub fn for_task(task: Task) -> Self {
@@ -156,46 +178,25 @@ impl QueryRuleConfig {
     /// The rule `method` asks by on `task`: the product's for `dref`, the authors' otherwise.
     pub fn for_method(task: Task, method: EvaluativeMethod) -> Self {
         match method {
-            EvaluativeMethod::Dref => Self::for_task(task).products().opening_for(task),
+            EvaluativeMethod::Dref => Self::for_task(task).products(task),
             _ => Self::for_task(task),
         }
     }
 
     /// The product's rule on these constants (docs/dref.md): the authors' ranking, woken after a
-    /// silence, under a 10 % ceiling that opens with the authors' asking and repays it from 90 %
-    /// of its earnings.
-    fn products(self) -> Self {
+    /// silence, under a 10 % ceiling that opens with the task's opening and repays it from 90 % of
+    /// its earnings.
+    fn products(self, task: Task) -> Self {
         Self {
             rank_window: 0,
             ceiling: Some(FeedbackCeiling {
-                opening: DEFAULT_OPENING,
                 start_empty: true,
                 repay_share: DEFAULT_REPAY_SHARE,
-                ..DEFAULT_CEILING
+                ..products_opening(task)
             }),
             wake_after: DEFAULT_WAKE_AFTER,
             ..self
         }
-    }
-
-    /// The product's opening on `task`. On Lunar Lander the learner takes off only with some
-    /// thousands of answers in its first 30k steps (EF-100 takes off at 9-31k steps; the 2,000-step
-    /// opening gave 935-1,306 answers by 15k and no seed of five learnt), so its opening is
-    /// [`LUNAR_LANDER_OPENING`]: 30k steps asked at 0.45 of each state's own visits, repaid as the
-    /// other tasks' is. The other tasks keep the 2,000-step opening their rows were measured with
-    /// (docs/dref.md, "The early budget by visits, five seeds").
-    fn opening_for(mut self, task: Task) -> Self {
-        if task == Task::LunarLander
-            && let Some(ceiling) = self.ceiling.as_mut()
-        {
-            *ceiling = FeedbackCeiling {
-                opening: LUNAR_LANDER_OPENING,
-                opening_rate: Some(LUNAR_LANDER_OPENING_RATE),
-                opening_placement: OpeningPlacement::ByVisits,
-                ..*ceiling
-            };
-        }
-        self
     }
 
     /// The running rule these constants describe.
@@ -385,7 +386,7 @@ impl EvaluativeRunConfig {
             critic_loss: CriticLoss::Mse,
         };
         let query_rule = match method {
-            EvaluativeMethod::Dref => QueryRuleConfig::for_declared().products(),
+            EvaluativeMethod::Dref => QueryRuleConfig::for_declared().products(Task::Placing),
             _ => QueryRuleConfig::for_declared(),
         };
         Self {
