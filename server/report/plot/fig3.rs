@@ -6,7 +6,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{
-    Axis, Panel, TITLE_PX, draw_labelled_line, draw_legend, draw_mesh, method_color, padded_range,
+    Axis, Panel, TITLE_PX, draw_labelled_line, draw_legend, draw_mesh, padded_range, panel_colors,
     short_number, text,
 };
 use crate::report::aggregate::{Fig3Method as Row, Fig3Task};
@@ -74,10 +74,10 @@ fn draw_panel<DB: DrawingBackend>(
         },
     )?;
 
+    let colors = panel_colors(task.methods.iter().map(|row| row.method.as_str()));
     // Bands first, so that no line is hidden under another method's band.
-    for row in &task.methods {
+    for (row, &color) in task.methods.iter().zip(&colors) {
         let c = &row.curve;
-        let color = method_color(&row.method);
         let upper = c.x.iter().zip(c.mean.iter().zip(&c.se));
         let mut outline: Vec<(f64, f64)> = upper.clone().map(|(x, (m, s))| (*x, m + s)).collect();
         outline.extend(upper.rev().map(|(x, (m, s))| (*x, m - s)));
@@ -86,8 +86,7 @@ fn draw_panel<DB: DrawingBackend>(
             color.mix(0.18).filled(),
         )))?;
     }
-    for row in &task.methods {
-        let color = method_color(&row.method);
+    for (row, &color) in task.methods.iter().zip(&colors) {
         let points = row
             .curve
             .x

@@ -5,7 +5,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{
-    Axis, Panel, TITLE_PX, draw_labelled_line, draw_legend, draw_mesh, method_color, padded_range,
+    Axis, Panel, TITLE_PX, draw_labelled_line, draw_legend, draw_mesh, padded_range, panel_colors,
     text,
 };
 use crate::report::aggregate::Fig5Task;
@@ -87,8 +87,8 @@ fn draw_panel<DB: DrawingBackend>(
     )?;
 
     let k = task.methods.len() as f64;
-    for (i, row) in task.methods.iter().enumerate() {
-        let color = method_color(&row.method);
+    let colors = panel_colors(task.methods.iter().map(|row| row.method.as_str()));
+    for (i, (row, &color)) in task.methods.iter().zip(&colors).enumerate() {
         let shift = (i as f64 - (k - 1.0) / 2.0) * DODGE;
         let c = &row.curve;
         let points = || c.x.iter().zip(&c.mean).map(move |(x, m)| (x + shift, *m));

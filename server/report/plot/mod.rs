@@ -63,6 +63,27 @@ fn method_color(method: &str) -> RGBColor {
     TAB10[7 + spread % 3]
 }
 
+/// The colours of one panel's rows, in order: each method's own ([`method_color`]), except
+/// where an earlier row of the panel already has it (two EF rows at two DREF rows' rates, or
+/// two unknown names that hash alike): that row takes the first tab10 colour the panel does not
+/// use yet, so no two lines of a panel look alike.
+fn panel_colors<'a>(methods: impl IntoIterator<Item = &'a str>) -> Vec<RGBColor> {
+    let mut taken: Vec<RGBColor> = Vec::new();
+    for method in methods {
+        let own = method_color(method);
+        let color = if taken.contains(&own) {
+            TAB10
+                .into_iter()
+                .find(|c| !taken.contains(c))
+                .unwrap_or(own)
+        } else {
+            own
+        };
+        taken.push(color);
+    }
+    taken
+}
+
 /// Figure size for `panels` panels (at least one, so an empty grid still makes a figure).
 fn figure_size(panels: usize) -> (u32, u32) {
     (PANEL_SIZE.0 * panels.max(1) as u32, PANEL_SIZE.1)
@@ -239,5 +260,16 @@ mod tests {
         assert_eq!(method_color("ef-2.5"), TAB10[5]);
         assert_eq!(method_color("dref-authors"), TAB10[6]);
         assert_eq!(method_color("something"), method_color("something"));
+    }
+
+    #[test]
+    fn report_no_two_rows_of_a_panel_share_a_colour() {
+        // Lunar Lander's 150k panel: EF at the authors' DREF's rate and at DREF's.
+        let rows = ["dref", "dref-authors", "ef-100", "sac", "ef-2.12", "ef-9.06"];
+        let colors = panel_colors(rows);
+        assert_eq!(colors[..5], [TAB10[0], TAB10[6], TAB10[1], TAB10[4], TAB10[5]]);
+        assert!(!colors[..5].contains(&colors[5]), "{colors:?}");
+        // A panel with one EF row keeps its fixed colour.
+        assert_eq!(panel_colors(["dref", "ef-6.22"])[1], TAB10[5]);
     }
 }
