@@ -66,7 +66,8 @@ fn method_color(method: &str) -> RGBColor {
 /// The colours of one panel's rows, in order: each method's own ([`method_color`]), except
 /// where an earlier row of the panel already has it (two EF rows at two DREF rows' rates, or
 /// two unknown names that hash alike): that row takes the first tab10 colour the panel does not
-/// use yet, so no two lines of a panel look alike.
+/// use yet, so no two lines of a panel look alike while it has ten rows or fewer (past ten,
+/// the rows that find none keep their own).
 fn panel_colors<'a>(methods: impl IntoIterator<Item = &'a str>) -> Vec<RGBColor> {
     let mut taken: Vec<RGBColor> = Vec::new();
     for method in methods {
@@ -265,9 +266,19 @@ mod tests {
     #[test]
     fn report_no_two_rows_of_a_panel_share_a_colour() {
         // Lunar Lander's 150k panel: EF at the authors' DREF's rate and at DREF's.
-        let rows = ["dref", "dref-authors", "ef-100", "sac", "ef-2.12", "ef-9.06"];
+        let rows = [
+            "dref",
+            "dref-authors",
+            "ef-100",
+            "sac",
+            "ef-2.12",
+            "ef-9.06",
+        ];
         let colors = panel_colors(rows);
-        assert_eq!(colors[..5], [TAB10[0], TAB10[6], TAB10[1], TAB10[4], TAB10[5]]);
+        assert_eq!(
+            colors[..5],
+            [TAB10[0], TAB10[6], TAB10[1], TAB10[4], TAB10[5]]
+        );
         assert!(!colors[..5].contains(&colors[5]), "{colors:?}");
         // A panel with one EF row keeps its fixed colour.
         assert_eq!(panel_colors(["dref", "ef-6.22"])[1], TAB10[5]);
