@@ -219,12 +219,6 @@ impl QueryRuleConfig {
         }
         rule
     }
-
-    /// A task an env declared: Placing's constants (c 0.2, k 4), the authors' largest c with a
-    /// k for a graph of a handful of predicates; set `c` and `k` for another.
-    pub fn for_declared() -> Self {
-        Self::for_task(Task::Placing)
-    }
 }
 
 /// Everything that defines a run.
@@ -364,7 +358,8 @@ impl EvaluativeRunConfig {
 
     /// The defaults for a task an env in another process declared, with its `graph`:
     /// stable-baselines3's SAC (two layers of 256, learning rate 3e-4, batch 256, tau 0.005)
-    /// and [`QueryRuleConfig::for_declared`].
+    /// and Placing's query rule (c 0.2, k 4: the authors' largest c with a k for a graph of a
+    /// handful of predicates; set `c` and `k` for another).
     pub fn declared(
         task: DeclaredTask,
         graph: SceneGraph,
@@ -385,10 +380,8 @@ impl EvaluativeRunConfig {
             human_critic: human_critic_for(method, ActorMix::Authors),
             critic_loss: CriticLoss::Mse,
         };
-        let query_rule = match method {
-            EvaluativeMethod::Dref => QueryRuleConfig::for_declared().products(Task::Placing),
-            _ => QueryRuleConfig::for_declared(),
-        };
+        // A declared task is asked as Placing is, its opening included.
+        let query_rule = QueryRuleConfig::for_method(Task::Placing, method);
         Self {
             task: TaskRef::Declared(task),
             method,
