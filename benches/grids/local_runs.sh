@@ -21,6 +21,10 @@ parallel=${5:-2}
 echo "cpu: $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) cores, avx512f: $(grep -c -m1 avx512f /proc/cpuinfo)"
 echo "binary: $bin ($(sha256sum "$bin" | cut -c1-12))"
 export bin scratch results
+# `nice` orders processes only inside their autogroup, and a runner started under setsid has one
+# of its own, so without this the grid takes its full share of the cores from a build or test
+# beside it whatever its nice; the autogroup's nice is what the scheduler weighs between them.
+echo 10 > "/proc/$$/autogroup" 2> /dev/null || echo "autogroup nice not set: $(cat "/proc/$$/autogroup" 2> /dev/null)"
 one() {
   dir=$1
   shift
