@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
-use super::aggregate::{Fig3Task, Fig5Method, Fig5Task};
+use super::aggregate::{Fig3Method as AggregateRow, Fig3Task, Fig5Method, Fig5Task};
 use super::methods::{
     AuthorsRatio, Fig3Method, Published, authors_ratios, display_name, paper_steps, published_fig3,
     published_ratio, task_title,
@@ -152,8 +152,8 @@ pub fn fig3_table(tasks: &[Fig3Task], as_run: bool) -> String {
         for m in &task.methods {
             let kind = Fig3Method::parse(&m.method);
             let mut name = display_name(&m.method);
-            if matches!(kind, Some(Fig3Method::EfMatched(_))) {
-                name.push_str(" (DREF's rate)");
+            if let Some(Fig3Method::EfMatched(rate)) = kind {
+                name.push_str(whose_rate(task, rate));
             }
             let paper = kind.map_or("–".into(), |k| fmt_published(task.task, k));
             let paper_ratio = kind.and_then(|k| published_ratio(task.task, k));
@@ -269,25 +269,51 @@ fn per_run_pacing(task: &Fig3Task) -> String {
 /// a run named by hand may carry one (EF-8.9 for a DREF at 8.89 %).
 const MATCHED_RATE_TOLERANCE_PP: f64 = 0.05;
 
+/// The row of `task` nearest `rate` (percentage points) among those `rate_of` gives one, if it
+/// lies within [`MATCHED_RATE_TOLERANCE_PP`].
+fn nearest_rate<'a>(
+    task: &'a Fig3Task,
+    rate: f64,
+    rate_of: impl Fn(&AggregateRow) -> Option<f64>,
+) -> Option<&'a AggregateRow> {
+    let distance = |m: &AggregateRow| rate_of(m).map_or(f64::INFINITY, |p| (p - rate).abs());
+    task.methods
+        .iter()
+        .filter(|m| distance(m) <= MATCHED_RATE_TOLERANCE_PP + 1e-9)
+        .min_by(|a, b| distance(a).total_cmp(&distance(b)))
+}
+
+/// Whose rate an "EF at a rate" row carries, as its name's suffix: the DREF row of the table
+/// whose mean rate it is, or, where no row of this table asks at it, a rule's that is not shown
+/// (an earlier default's or an ablation's: EF-2.51 on Placing is an earlier default's, 121.5k at
+/// 2.51 %).
+fn whose_rate(task: &Fig3Task, rate: f64) -> &'static str {
+    let dref_rate = |m: &AggregateRow| {
+        Fig3Method::parse(&m.method)
+            .is_some_and(Fig3Method::is_dref)
+            .then_some(m.feedback_pct.mean)
+    };
+    match nearest_rate(task, rate, dref_rate).and_then(|m| Fig3Method::parse(&m.method)) {
+        Some(Fig3Method::Dref) => " (DREF's rate)",
+        Some(Fig3Method::DrefAuthors) => " (the authors' DREF's rate)",
+        Some(Fig3Method::DrefMasked) => " (the masked authors' DREF's rate)",
+        _ => " (a DREF's rate not in this table)",
+    }
+}
+
 /// For each DREF row with an "EF at its rate" row beside it: whether DREF's seeds lie above
 /// EF's, by the one-sided exact Mann-Whitney U test over seeds.
 fn dref_against_matched(task: &Fig3Task) -> String {
     let mut out = String::new();
+    let ef_rate = |m: &AggregateRow| match Fig3Method::parse(&m.method) {
+        Some(Fig3Method::EfMatched(p)) => Some(p),
+        _ => None,
+    };
     for dref in &task.methods {
         if !Fig3Method::parse(&dref.method).is_some_and(Fig3Method::is_dref) {
             continue;
         }
-        let rate = dref.feedback_pct.mean;
-        let distance = |m: &&super::aggregate::Fig3Method| match Fig3Method::parse(&m.method) {
-            Some(Fig3Method::EfMatched(p)) => (p - rate).abs(),
-            _ => f64::INFINITY,
-        };
-        let Some(ef) = task
-            .methods
-            .iter()
-            .filter(|m| distance(m) <= MATCHED_RATE_TOLERANCE_PP + 1e-9)
-            .min_by(|a, b| distance(a).total_cmp(&distance(b)))
-        else {
+        let Some(ef) = nearest_rate(task, dref.feedback_pct.mean, ef_rate) else {
             continue;
         };
         if let Some(t) = mann_whitney_greater(&dref.finals, &ef.finals) {

@@ -82,6 +82,39 @@ DREF above EF-6.2% (its rate): one-sided exact Mann-Whitney U = 20.0 over 5 and 
 }
 
 #[test]
+fn report_an_ef_row_at_a_rate_is_named_after_the_rule_whose_rate_it_is() {
+    let row = |method: &str, rate: f64| {
+        let mut r = fig3_row(method, ms(1e3, 1e2, 5), ms(rate, 0.0, 5));
+        r.finals = vec![1e3; 5];
+        r
+    };
+    let text = fig3_table(
+        &[Fig3Task {
+            task: Task::LunarLander,
+            methods: vec![
+                row("dref", 9.06),
+                row("dref-authors", 2.12),
+                row("ef-9.06", 9.06),
+                row("ef-2.12", 2.12),
+                row("ef-10.31", 10.31),
+            ],
+        }],
+        false,
+    );
+    for line in [
+        "| EF-9.06% (DREF's rate) |",
+        "| EF-2.12% (the authors' DREF's rate) |",
+        "| EF-10.31% (a DREF's rate not in this table) |",
+    ] {
+        assert!(text.contains(line), "no {line} in:\n{text}");
+    }
+    assert!(
+        text.contains("DREF (authors' code) above EF-2.12% (its rate)"),
+        "{text}"
+    );
+}
+
+#[test]
 fn report_fig3_table_lists_each_dref_runs_pacing() {
     use crate::report::aggregate::RunPacing;
     let mut dref = fig3_row("dref", ms(9.0, 1.0, 2), ms(5.0, 0.0, 2));
