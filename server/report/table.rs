@@ -271,11 +271,11 @@ const MATCHED_RATE_TOLERANCE_PP: f64 = 0.05;
 
 /// The row of `task` nearest `rate` (percentage points) among those `rate_of` gives one, if it
 /// lies within [`MATCHED_RATE_TOLERANCE_PP`].
-fn nearest_rate<'a>(
-    task: &'a Fig3Task,
+fn nearest_rate(
+    task: &Fig3Task,
     rate: f64,
     rate_of: impl Fn(&AggregateRow) -> Option<f64>,
-) -> Option<&'a AggregateRow> {
+) -> Option<&AggregateRow> {
     let distance = |m: &AggregateRow| rate_of(m).map_or(f64::INFINITY, |p| (p - rate).abs());
     task.methods
         .iter()
