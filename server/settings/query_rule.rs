@@ -58,6 +58,11 @@ pub struct QueryRuleSection {
     /// the learner is) [default `ranked`].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub opening_placement: Option<OpeningPlacement>,
+    /// With a paced opening: let its rate fall in a straight line from `opening_rate` at its
+    /// first step to nothing at its last, so the answers thin out instead of stopping at once
+    /// (it asks about half as many: double `feedback_opening` to spend the same) [default false].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub opening_taper: Option<bool>,
     /// With an opening repaid from part of the earnings (`opening_repay_share` below 1): where
     /// the rest is asked while it repays, `ranked` (the best-ranked state only) or `by_visits`
     /// (each abstract state asked that rest's share of its visits since the repayment began, so
@@ -93,6 +98,7 @@ impl QueryRuleSection {
                 rule.ceiling
                     .map_or_else(Default::default, |x| x.opening_placement),
             ),
+            opening_taper: Some(rule.ceiling.is_some_and(|x| x.opening_taper)),
             repayment_placement: Some(
                 rule.ceiling
                     .map_or_else(Default::default, |x| x.repayment_placement),
@@ -227,6 +233,17 @@ impl QueryRuleSection {
                 }
                 c.opening_placement = placement;
             }
+        }
+        if let Some(taper) = self.opening_taper
+            && let Some(c) = the_ceiling(rule, "opening_taper", !taper)?
+        {
+            if taper && c.opening_rate.is_none() {
+                return Err(SettingsError::bad(
+                    "opening_taper",
+                    "only a paced opening tapers; set opening_rate too",
+                ));
+            }
+            c.opening_taper = taper;
         }
         if let Some(placement) = self.repayment_placement {
             let ranked = placement == OpeningPlacement::Ranked;

@@ -267,3 +267,58 @@ fn a_repayment_by_visits_needs_an_opening_repaid_in_part() {
         );
     }
 }
+
+#[test]
+fn a_taper_needs_a_paced_opening() {
+    let rule = |pairs: &[(&str, &str)], method| ceiling(Task::LunarLander, pairs, method);
+    let product = rule(&[], EvaluativeMethod::Dref).unwrap().unwrap();
+    assert!(!product.opening_taper, "the product's opening is flat");
+    // Lunar Lander's product opening is paced: doubled and tapered, it spends the same.
+    let tapered = [("feedback_opening", "60000"), ("opening_taper", "true")];
+    let tapered = rule(&tapered, EvaluativeMethod::Dref).unwrap().unwrap();
+    assert!(tapered.opening_taper);
+    assert_eq!(
+        (tapered.opening, tapered.opening_rate),
+        (60_000, Some(0.45))
+    );
+    let budget = |c: FeedbackCeiling| {
+        let mut b = c.budget();
+        let mut earned = 0.0;
+        for _ in 0..c.opening {
+            b.tick();
+            earned += b.opening_rate_now().unwrap();
+        }
+        earned
+    };
+    let flat = budget(product);
+    assert!((flat - 13_500.0).abs() < 1e-6, "{flat}");
+    assert!((budget(tapered) - 13_500.2).abs() < 0.1, "the same answers");
+    assert_eq!(
+        rule(&[("opening_taper", "false")], EvaluativeMethod::DrefAuthors),
+        Ok(None),
+        "its off value on a rule without a ceiling"
+    );
+    for (pairs, task, method, words) in [
+        (
+            vec![("opening_taper", "true")],
+            Task::Placing,
+            EvaluativeMethod::Dref,
+            "set opening_rate",
+        ),
+        (
+            vec![("opening_taper", "true")],
+            Task::LunarLander,
+            EvaluativeMethod::DrefAuthors,
+            "no ceiling",
+        ),
+        (
+            vec![("opening_taper", "yes please")],
+            Task::LunarLander,
+            EvaluativeMethod::Dref,
+            "opening_taper",
+        ),
+    ] {
+        let e = ceiling(task, &pairs, method).unwrap_err();
+        assert!(e.contains("opening_taper") && e.contains(words), "{e}");
+    }
+}

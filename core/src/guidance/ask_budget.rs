@@ -31,6 +31,13 @@
 //! take off early are those with thousands of answers in their first 15k steps
 //! (`benches/grids/early_answers.py`), while the authors' ranking asks about a thousand there.
 //!
+//! A paced opening may also taper (`opening_taper`, off by default): its rate falls in a straight
+//! line from `opening_rate` at its first step to nothing after its last, so the answers thin out
+//! instead of stopping at once. On Lunar Lander most of what the product's DREF gives up against
+//! EF-100 it gives up in the 30k steps after its flat 30k-step opening ends (docs/dref.md, "Where
+//! Lunar Lander's gap builds"); a taper over 60k steps spends the same 13,500 answers with no step
+//! at which they stop.
+//!
 //! [`QueryRule`]: super::query_rule::QueryRule
 //!
 //! Optionally (`min_feedback_rate`, off by default) the rate follows the answers themselves:
@@ -76,6 +83,11 @@ pub struct AskBudget {
     /// asks on every step the ranking asks, as the authors' rule does).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     opening_bucket: Option<Box<AskBudget>>,
+    /// A tapered opening's `(rate at its first step, its length in steps)`: the paced opening's
+    /// bucket earns a rate falling in a straight line from the first to nothing after the last
+    /// (`None`: a flat rate; checkpoints written before it read so).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    taper: Option<(f64, u64)>,
 }
 
 pub(super) fn is_zero(n: &u64) -> bool {
@@ -113,6 +125,7 @@ impl AskBudget {
             repay_share: 1.0,
             spare: 0.0,
             opening_bucket: None,
+            taper: None,
         }
     }
 
@@ -143,6 +156,24 @@ impl AskBudget {
         let burst = self.burst as u32;
         self.opening_bucket = Some(Box::new(AskBudget::new(rate, burst).starting_empty()));
         self
+    }
+
+    /// The same bucket, its paced opening tapered: the opening's rate falls in a straight line
+    /// from the rate it was paced at, on its first step, to nothing after its last, so it asks
+    /// about half as many. Call after [`AskBudget::opening_for`] and [`AskBudget::opening_at`];
+    /// an unpaced opening is left as it is.
+    pub fn tapering(mut self) -> Self {
+        if let (Some(bucket), true) = (&self.opening_bucket, self.opening_left > 0) {
+            self.taper = Some((bucket.rate, self.opening_left));
+        }
+        self
+    }
+
+    /// Whether the step now running is one of a tapered opening's: its rate changes from step
+    /// to step, so a state placed by visits is owed the rate of each visit, not today's rate
+    /// times its visits.
+    pub fn in_tapered_opening(&self) -> bool {
+        self.taper.is_some() && self.in_paced_opening()
     }
 
     /// Whether the step now running is one of a paced opening's: the rule then ranks as a
@@ -194,6 +225,13 @@ impl AskBudget {
     pub fn tick(&mut self) {
         self.in_opening = self.opening_left > 0;
         self.opening_left = self.opening_left.saturating_sub(1);
+        if let (true, Some((first, steps)), Some(bucket)) =
+            (self.in_opening, self.taper, &mut self.opening_bucket)
+        {
+            // Step i of the opening's n (from 1) earns first * (n - i + 1) / n: `first` on its
+            // first step, first / n on its last, about first * n / 2 in all.
+            bucket.rate = first * (self.opening_left + 1) as f64 / steps as f64;
+        }
         let earned = self.current_rate();
         if self.repaying_in_part() {
             let repaid = earned * self.repay_share;

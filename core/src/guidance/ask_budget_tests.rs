@@ -150,6 +150,39 @@ fn a_paced_opening_asks_its_share_then_repays_within_the_runs_ceiling() {
 }
 
 #[test]
+fn a_tapered_opening_asks_half_as_many_thinning_out_to_its_end() {
+    let mut budget = AskBudget::new(0.1, 20)
+        .opening_for(60_000)
+        .starting_empty()
+        .repaying(0.9)
+        .opening_at(0.45)
+        .tapering();
+    // Step i of 60,000 earns 0.45 * (60,001 - i) / 60,000: 10,125.1 over the first half,
+    // 3,375.1 over the second, 13,500.2 in all (the flat opening's over 30,000 steps).
+    let first_half = ask_whenever_allowed(&mut budget, 30_000);
+    let second_half = ask_whenever_allowed(&mut budget, 29_000);
+    assert!((10_124..=10_125).contains(&first_half), "{first_half}");
+    let last = ask_whenever_allowed(&mut budget, 1_000);
+    assert!(budget.in_tapered_opening(), "its last step");
+    // The last 1,000 steps earn 0.45 * 500.5 * 1,000 / 60,000 = 3.75.
+    assert!((3..=5).contains(&last), "{last}");
+    let opening = first_half + second_half + last;
+    assert!((13_499..=13_500).contains(&opening), "{opening}");
+    // 13,500 asked against 6,000 earned: 7,500 repaid at 0.09 a step, and the run's total is
+    // within 10 % of its steps.
+    let after = ask_whenever_allowed(&mut budget, 150_000 - 60_000);
+    assert!(!budget.in_tapered_opening());
+    assert!(
+        (14_990..=15_000).contains(&(opening + after)),
+        "{}",
+        opening + after
+    );
+    // Tapering an opening that is not paced leaves the bucket as it was.
+    let unpaced = AskBudget::new(0.1, 20).opening_for(1_000);
+    assert_eq!(unpaced.clone().tapering(), unpaced);
+}
+
+#[test]
 fn a_paced_opening_admits_more_ranks_as_its_bucket_fills() {
     let mut budget = AskBudget::new(0.1, 21).opening_for(1_000).opening_at(0.5);
     budget.tick();

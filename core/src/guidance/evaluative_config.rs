@@ -71,6 +71,11 @@ pub struct FeedbackCeiling {
     /// its own visits since the repayment began.
     #[serde(default, skip_serializing_if = "is_ranked")]
     pub repayment_placement: OpeningPlacement,
+    /// A paced opening's rate falls in a straight line from `opening_rate` at its first step to
+    /// nothing after its last, so it asks about half as many and its answers thin out instead of
+    /// stopping at once (false, the default: a flat rate; configs before it read so).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub opening_taper: bool,
 }
 
 fn is_ranked(placement: &OpeningPlacement) -> bool {
@@ -85,6 +90,9 @@ impl FeedbackCeiling {
             .repaying(self.repay_share);
         if let Some(rate) = self.opening_rate {
             budget = budget.opening_at(rate);
+        }
+        if self.opening_taper {
+            budget = budget.tapering();
         }
         if self.start_empty {
             budget = budget.starting_empty();
@@ -111,6 +119,7 @@ pub const DEFAULT_CEILING: FeedbackCeiling = FeedbackCeiling {
     opening_rate: None,
     opening_placement: OpeningPlacement::Ranked,
     repayment_placement: OpeningPlacement::Ranked,
+    opening_taper: false,
 };
 /// The product DREF's silence wake: after 1,000 steps without a query the rule ranks the current
 /// state among the states of that silence, so it cannot freeze, and otherwise ranks as the

@@ -202,7 +202,10 @@ impl QueryRule {
         // A paced opening, or a repayment's spare, placed by visits asks each state its share
         // of its own visits.
         if let Some((rate, share)) = self.placement() {
-            return share.behind(g, rate);
+            return match self.budget.as_ref().is_some_and(|b| b.in_tapered_opening()) {
+                true => share.behind_owed(g),
+                false => share.behind(g, rate),
+            };
         }
         // Else a paced opening must still spend its share: ranked as the authors rank, Lunar
         // Lander's rule asks about a thousand of its first 15k steps whatever the bucket holds.
@@ -232,8 +235,16 @@ impl QueryRule {
             wake.during.push(g);
             wake.silent += 1;
         }
+        let tapered_rate = self
+            .budget
+            .as_deref()
+            .filter(|b| b.in_tapered_opening())
+            .and_then(|b| b.opening_rate_now());
         if let Some(share) = self.placement_mut() {
-            share.visit(g);
+            match tapered_rate {
+                Some(rate) => share.visit_owing(g, rate),
+                None => share.visit(g),
+            }
         }
         self.should_query(g)
     }

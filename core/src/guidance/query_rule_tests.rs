@@ -272,6 +272,41 @@ fn a_paced_opening_by_visits_asks_each_state_its_share_of_its_visits() {
     assert!(a.abs_diff(b) <= 2, "{a}, {b}");
 }
 
+#[test]
+fn a_tapered_opening_by_visits_asks_each_state_the_rate_of_its_own_visits() {
+    // 4,000 steps tapered from a half to nothing: about 1,000 asked, 750 of them in the first
+    // 2,000 steps. The learner is in A for those, then in A and B by turns.
+    let budget = AskBudget::new(0.1, 20)
+        .opening_for(4_000)
+        .starting_empty()
+        .opening_at(0.5)
+        .tapering();
+    let mut rule = QueryRule::new(0.2, 4, UcbForm::Authors)
+        .waking_after(1_000)
+        .with_ceiling(budget)
+        .opening_by_visits();
+    let (mut first, mut later) = (0, (0, 0));
+    for step in 0..4_000u64 {
+        let g = if step >= 2_000 && step % 2 == 1 { B } else { A };
+        if rule.visit(g) {
+            rule.record(g, 1.0, 0.0);
+            match (step < 2_000, g == A) {
+                (true, _) => first += 1,
+                (false, true) => later.0 += 1,
+                (false, false) => later.1 += 1,
+            }
+        }
+    }
+    assert!((748..=751).contains(&first), "{first}");
+    // Each is owed about 125 of the last 250: A, with 750 answers for its first 2,000 visits,
+    // is still asked the later rate of its later visits (owed at today's rate times all its
+    // visits, about 0.1 * 3,000 by then, it would not be asked again).
+    assert!(
+        (118..=127).contains(&later.0) && (118..=127).contains(&later.1),
+        "{later:?}"
+    );
+}
+
 /// After a paced opening of 1,000 steps at half of them (500 asked, 100 earned: a debt of 400)
 /// on the same 3:1 learner, the ceiling's 10 % repaid half from its earnings: the debt is paid
 /// by about step 9,000 and the other half, 400 queries, is the spare. `(asked in A, asked in B)`

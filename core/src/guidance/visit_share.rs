@@ -36,6 +36,11 @@ pub enum OpeningPlacement {
 pub struct VisitShare {
     /// `(visits, asked)`; a `BTreeMap` so that checkpoints serialise in a stable order.
     states: BTreeMap<AbstractState, (u64, u64)>,
+    /// Under a tapered opening, whose rate changes from step to step: the queries each state is
+    /// owed, the sum of the rate at each of its visits (empty otherwise, and in checkpoints
+    /// written before it).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    owed: BTreeMap<AbstractState, f64>,
 }
 
 impl VisitShare {
@@ -55,6 +60,21 @@ impl VisitShare {
     pub fn behind(&self, g: AbstractState, rate: f64) -> bool {
         let (visits, asked) = self.states.get(&g).copied().unwrap_or_default();
         (asked as f64) < rate * visits as f64
+    }
+
+    /// A step of a tapered opening reached `g`, where the opening asks `rate` of its steps now.
+    pub fn visit_owing(&mut self, g: AbstractState, rate: f64) {
+        self.visit(g);
+        *self.owed.entry(g).or_default() += rate;
+    }
+
+    /// Whether `g` has been asked less than it is owed ([`VisitShare::visit_owing`]; this step's
+    /// visit included): under a falling rate a state visited often early on is asked its share
+    /// of each later visit at the later rate, not held back until its visits catch up with the
+    /// early rate.
+    pub fn behind_owed(&self, g: AbstractState) -> bool {
+        let asked = self.states.get(&g).map_or(0, |&(_, asked)| asked);
+        (asked as f64) < self.owed.get(&g).copied().unwrap_or(0.0)
     }
 
     /// `(visits, asked)` in `g` so far.
@@ -86,5 +106,34 @@ mod tests {
         );
         assert_eq!(share.of(g), (20, 5));
         assert_eq!(share.of(AbstractState(1)), (0, 0), "an unvisited state");
+    }
+
+    #[test]
+    fn under_a_falling_rate_a_state_is_owed_the_rate_of_each_visit() {
+        let g = AbstractState(0b11);
+        let mut share = VisitShare::default();
+        let mut asked = Vec::new();
+        // Half of the first 20 visits, then an eighth of the next 20 (binary fractions: the
+        // sums are exact).
+        for step in 0..40u64 {
+            share.visit_owing(g, if step < 20 { 0.5 } else { 0.125 });
+            if share.behind_owed(g) {
+                share.asked(g);
+                asked.push(step);
+            }
+        }
+        assert_eq!(asked.len(), 13, "{asked:?}");
+        assert_eq!(&asked[..3], &[0, 2, 4], "every other visit at first");
+        assert_eq!(
+            &asked[10..],
+            &[20, 28, 36],
+            "every eighth once the rate falls"
+        );
+        // Today's rate times all the visits (5) would leave the state unasked to the end.
+        assert!(!share.behind(g, 0.125));
+        assert!(
+            !share.behind_owed(AbstractState(1)),
+            "an unvisited state owes nothing"
+        );
     }
 }
