@@ -186,6 +186,18 @@ impl QueryRuleSection {
             && let Some(c) = the_ceiling(rule, "feedback_opening", steps == 0)?
         {
             c.opening = steps;
+            if steps == 0 {
+                // Closing a task's opening closes all of it: no pace, placement or repayment of
+                // an opening that never runs is left in the run's config to be read as if it did.
+                *c = FeedbackCeiling {
+                    repay_share: 1.0,
+                    opening_rate: None,
+                    opening_placement: OpeningPlacement::Ranked,
+                    repayment_placement: OpeningPlacement::Ranked,
+                    opening_taper: false,
+                    ..*c
+                };
+            }
         }
         if let Some(empty) = self.feedback_start_empty
             && let Some(c) = the_ceiling(rule, "feedback_start_empty", !empty)?
@@ -200,6 +212,12 @@ impl QueryRuleSection {
                 ));
             }
             if let Some(c) = the_ceiling(rule, "opening_repay_share", share == 1.0)? {
+                if share < 1.0 && c.opening == 0 {
+                    return Err(SettingsError::bad(
+                        "opening_repay_share",
+                        "the rule has no opening to repay; set feedback_opening too",
+                    ));
+                }
                 c.repay_share = share;
             }
         }

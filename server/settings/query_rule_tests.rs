@@ -86,6 +86,7 @@ fn the_openings_accounting_is_two_settings_of_the_ceiling_on_for_dref_only() {
     let set = rule(
         &[
             ("max_feedback_rate", "0.1"),
+            ("feedback_opening", "2000"),
             ("feedback_start_empty", "true"),
             ("opening_repay_share", "0.5"),
         ],
@@ -93,6 +94,16 @@ fn the_openings_accounting_is_two_settings_of_the_ceiling_on_for_dref_only() {
     );
     let set = set.unwrap().unwrap();
     assert_eq!((set.start_empty, set.repay_share), (true, 0.5));
+    // A repayment without an opening would be inert: refused by name.
+    let no_opening = rule(
+        &[("max_feedback_rate", "0.1"), ("opening_repay_share", "0.5")],
+        EvaluativeMethod::DrefAuthors,
+    )
+    .unwrap_err();
+    assert!(
+        no_opening.contains("opening_repay_share") && no_opening.contains("no opening to repay"),
+        "{no_opening}"
+    );
     // Out of range, or with no ceiling to hold them: refused by name.
     for (pairs, name, words) in [
         (
@@ -320,5 +331,47 @@ fn a_taper_needs_a_paced_opening() {
     ] {
         let e = ceiling(task, &pairs, method).unwrap_err();
         assert!(e.contains("opening_taper") && e.contains(words), "{e}");
+    }
+}
+
+#[test]
+fn closing_an_opening_leaves_nothing_of_it_in_the_config() {
+    // Lunar Lander's product opening is paced, placed by visits and repaid from 90 %: closed,
+    // none of that is left to be read as if the opening ran.
+    let closed = ceiling(
+        Task::LunarLander,
+        &[("feedback_opening", "0")],
+        EvaluativeMethod::Dref,
+    )
+    .unwrap()
+    .unwrap();
+    let product = ceiling(Task::LunarLander, &[], EvaluativeMethod::Dref)
+        .unwrap()
+        .unwrap();
+    assert_eq!(
+        closed,
+        FeedbackCeiling {
+            opening: 0,
+            repay_share: 1.0,
+            opening_rate: None,
+            opening_placement: OpeningPlacement::Ranked,
+            ..product
+        },
+        "the rate, burst and empty start stay"
+    );
+    assert!(closed.start_empty && closed.rate == 0.1);
+    // Set again after the close, each is refused by name: there is no opening to shape.
+    for (key, value, words) in [
+        ("opening_rate", "0.45", "no opening to pace"),
+        ("opening_repay_share", "0.9", "no opening to repay"),
+        ("opening_placement", "by_visits", "set opening_rate"),
+    ] {
+        let e = ceiling(
+            Task::LunarLander,
+            &[("feedback_opening", "0"), (key, value)],
+            EvaluativeMethod::Dref,
+        )
+        .unwrap_err();
+        assert!(e.contains(key) && e.contains(words), "{e}");
     }
 }
