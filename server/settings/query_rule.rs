@@ -185,18 +185,11 @@ impl QueryRuleSection {
         if let Some(steps) = self.feedback_opening
             && let Some(c) = the_ceiling(rule, "feedback_opening", steps == 0)?
         {
-            c.opening = steps;
-            if steps == 0 {
-                // Closing a task's opening closes all of it: no pace, placement or repayment of
-                // an opening that never runs is left in the run's config to be read as if it did.
-                *c = FeedbackCeiling {
-                    repay_share: 1.0,
-                    opening_rate: None,
-                    opening_placement: OpeningPlacement::Ranked,
-                    repayment_placement: OpeningPlacement::Ranked,
-                    opening_taper: false,
-                    ..*c
-                };
+            // Closing a task's opening closes all of it: nothing of an opening that never runs
+            // is left in the run's config to be read as if it did.
+            match steps {
+                0 => *c = c.without_opening(),
+                _ => c.opening = steps,
             }
         }
         if let Some(empty) = self.feedback_start_empty

@@ -83,6 +83,19 @@ fn is_ranked(placement: &OpeningPlacement) -> bool {
 }
 
 impl FeedbackCeiling {
+    /// The same ceiling with no opening: the opening's pace, placement, taper and repayment go
+    /// with it (as [`DEFAULT_CEILING`] has them), so a config never carries settings of an
+    /// opening that does not run; the rate, burst, floor and empty start stay.
+    pub fn without_opening(self) -> Self {
+        Self {
+            rate: self.rate,
+            burst: self.burst,
+            floor: self.floor,
+            start_empty: self.start_empty,
+            ..DEFAULT_CEILING
+        }
+    }
+
     /// The bucket that holds the rule to this ceiling.
     pub fn budget(&self) -> AskBudget {
         let mut budget = AskBudget::new(self.rate, self.burst)
