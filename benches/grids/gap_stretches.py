@@ -20,6 +20,8 @@ import csv
 import statistics
 from pathlib import Path
 
+from rows import mean_se
+
 
 def finished_seeds(row: Path) -> dict[int, Path]:
     return {
@@ -45,12 +47,10 @@ def gains(run: Path, cuts: list[int]) -> list[float]:
     return [b - a for a, b in zip(sums, sums[1:])]
 
 
-def mean_se(values: list[float]) -> str:
-    mean = statistics.mean(values)
-    if len(values) < 2:
-        return f"{mean / 1e3:.1f}k"
-    se = statistics.stdev(values) / len(values) ** 0.5
-    return f"{mean / 1e3:.1f}k +- {se / 1e3:.1f}k"
+def in_thousands(values: list[float]) -> str:
+    """Mean +- s.e. (rows.py's), in thousands; the mean alone for one seed."""
+    mean, se = mean_se(values)
+    return f"{mean / 1e3:.1f}k" if len(values) < 2 else f"{mean / 1e3:.1f}k +- {se / 1e3:.1f}k"
 
 
 def main() -> None:
@@ -82,7 +82,7 @@ def main() -> None:
             own[i].append(a)
     print("| stretch | " + " | ".join(labels) + " |")
     print("|---|" + "---:|" * len(labels))
-    print("| the comparator's gain less the row's | " + " | ".join(map(mean_se, gaps)) + " |")
+    print("| the comparator's gain less the row's | " + " | ".join(map(in_thousands, gaps)) + " |")
     print(
         "| the row's own gain, mean | "
         + " | ".join(f"{statistics.mean(g) / 1e3:.1f}k" for g in own)

@@ -85,13 +85,15 @@ fn is_ranked(placement: &OpeningPlacement) -> bool {
 impl FeedbackCeiling {
     /// The same ceiling with no opening: the opening's pace, placement, taper and repayment go
     /// with it (as [`DEFAULT_CEILING`] has them), so a config never carries settings of an
-    /// opening that does not run; the rate, burst, floor and empty start stay.
+    /// opening that does not run; the rate, burst, floor and empty start stay. The opening's
+    /// length is set to 0 here, not taken from the default, which a task may one day open.
     pub fn without_opening(self) -> Self {
         Self {
             rate: self.rate,
             burst: self.burst,
             floor: self.floor,
             start_empty: self.start_empty,
+            opening: 0,
             ..DEFAULT_CEILING
         }
     }
