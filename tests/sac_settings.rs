@@ -53,6 +53,7 @@ fn settings_override_every_sac_key() {
             answered_after: 0,
             agree_within: 0.0,
             failure_window: 0,
+            authors_until: 0,
             unread_to_q: false,
             answer_replay: false,
         })
@@ -63,6 +64,7 @@ fn settings_override_every_sac_key() {
         ("mix_answered_after", "10"),
         ("mix_agree_within", "0.2"),
         ("mix_failure_window", "10"),
+        ("mix_authors_until", "30000"),
         ("mix_unread_to_q", "true"),
     ])
     .unwrap();
@@ -74,9 +76,10 @@ fn settings_override_every_sac_key() {
             critic.answered_after,
             critic.agree_within,
             critic.failure_window,
+            critic.authors_until,
             critic.unread_to_q
         ),
-        (ActorMix::Answered, 0.3, 10, 0.2, 10, true)
+        (ActorMix::Answered, 0.3, 10, 0.2, 10, 30_000, true)
     );
     let replayed = sac_with(&[
         ("human_critic_mask", "true"),
@@ -130,6 +133,8 @@ fn settings_reject_unknown_keys_and_bad_values_clearly() {
         ("mix_agree_within", "0.2", "mix = \"answered\""),
         ("mix_failure_window", "10", "mix = \"answered\""),
         ("mix_failure_window", "-1", "invalid"),
+        ("mix_authors_until", "30000", "mix = \"answered\""),
+        ("mix_authors_until", "-1", "invalid"),
         ("mix_unread_to_q", "true", "mix = \"answered\""),
         ("mix_unread_to_q", "1", "invalid type"),
         (

@@ -104,6 +104,10 @@ pub struct HumanCriticSection {
     /// the run's last N episodes that failed, at least `mix_unanswered` (0: off).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mix_failure_window: Option<u32>,
+    /// With `mix = "answered"`: the actor reads H at full weight on every transition until
+    /// the run's step N (the authors' mix), and as the answered mix after it (0: off).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mix_authors_until: Option<u64>,
     /// With `mix = "answered"`: the share of H's weight the actor does not read on a
     /// transition goes to Q (each transition's weights sum to 1).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -208,6 +212,7 @@ impl HumanCriticSection {
             mix_answered_after: Some(critic.answered_after),
             mix_agree_within: Some(critic.agree_within),
             mix_failure_window: Some(critic.failure_window),
+            mix_authors_until: Some(critic.authors_until),
             mix_unread_to_q: Some(critic.unread_to_q),
         }
     }
@@ -296,6 +301,10 @@ impl HumanCriticSection {
         if let Some(n) = self.mix_failure_window {
             answered_mix_only(sac, "mix_failure_window", n > 0, "gates the answered mix")?;
             critic(sac).failure_window = n;
+        }
+        if let Some(n) = self.mix_authors_until {
+            answered_mix_only(sac, "mix_authors_until", n > 0, "gates the answered mix")?;
+            critic(sac).authors_until = n;
         }
         if let Some(on) = self.mix_unread_to_q {
             answered_mix_only(sac, "mix_unread_to_q", on, "gives Q H's unread weight")?;

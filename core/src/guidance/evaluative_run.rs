@@ -316,7 +316,9 @@ impl EvaluativeRun {
         }
         self.pacing.step(self.steps, evaluation.is_some());
         let critic = self.config.sac.human_critic.as_ref();
-        let gate = self.mix_gate.unanswered_weight(self.successes, critic);
+        let gate = self
+            .mix_gate
+            .unanswered_weight(self.steps, self.successes, critic);
         self.learner.set_unanswered_override(gate);
         let update = self.learner.update(&self.replay);
 

@@ -287,6 +287,18 @@ fn the_as_run_action_scale_shows_the_oracle_and_h_hat_a_tenth_of_the_action() {
     assert_ne!(shown, full);
 }
 
+/// What the learner does at a fixed state: its action, Q and H there, as bits.
+fn probe(run: &EvaluativeRun) -> [u32; 4] {
+    let mut sac = run.learner().clone();
+    let (obs, mut action) = ([0.1f32, -0.2], [0.0f32; 2]);
+    sac.act(&obs, true, &mut action);
+    let (q, h) = (
+        sac.q_value(&obs, &action),
+        sac.human_estimate(&obs, &action),
+    );
+    [action[0], action[1], q, h].map(f32::to_bits)
+}
+
 /// `answered_after`: the answered mix reads H at full weight everywhere, which is the authors'
 /// mix bit for bit, until the run's N-th successful episode has ended; then it reads H only on
 /// answered rows, and the learner parts from the authors'.
@@ -298,17 +310,6 @@ fn the_answered_mix_reads_h_everywhere_until_the_first_success() {
         let critic = config.sac.human_critic.as_mut().unwrap();
         (critic.mix, critic.answered_after) = (mix, answered_after);
         config
-    };
-    // What the learner does at a fixed state: its action, Q and H there.
-    let probe = |run: &EvaluativeRun| {
-        let mut sac = run.learner().clone();
-        let (obs, mut action) = ([0.1f32, -0.2], [0.0f32; 2]);
-        sac.act(&obs, true, &mut action);
-        let (q, h) = (
-            sac.q_value(&obs, &action),
-            sac.human_estimate(&obs, &action),
-        );
-        [action[0], action[1], q, h].map(f32::to_bits)
     };
     let (_, _, episodes) = run(with(ActorMix::Authors, 0), 4000);
     let first = episodes
@@ -338,4 +339,35 @@ fn the_answered_mix_reads_h_everywhere_until_the_first_success() {
         probe(&authors),
         "a gate that never shuts is the authors' mix"
     );
+}
+
+/// `authors_until`: the answered mix is the authors' mix bit for bit for the run's first N
+/// steps, whatever the episodes' outcomes, and parts from it after. (Reaching's 2,000-step
+/// opening asks nearly every step, so the mixes differ only past it.)
+#[test]
+fn the_answered_mix_reads_h_everywhere_until_its_step() {
+    use crate::rl::ActorMix;
+    const UNTIL: u64 = 2_400;
+    let with = |mix: ActorMix, authors_until: u64| {
+        let mut config = tiny(Task::Reaching, "dref");
+        let critic = config.sac.human_critic.as_mut().unwrap();
+        (critic.mix, critic.authors_until) = (mix, authors_until);
+        config
+    };
+    let (authors, ..) = run(with(ActorMix::Authors, 0), UNTIL);
+    let (gated, ..) = run(with(ActorMix::Answered, UNTIL), UNTIL);
+    assert_eq!(
+        probe(&gated),
+        probe(&authors),
+        "the authors' mix until its step"
+    );
+    let (answered, ..) = run(with(ActorMix::Answered, 0), UNTIL);
+    assert_ne!(
+        probe(&answered),
+        probe(&authors),
+        "the gate is what made them equal"
+    );
+    let (authors, ..) = run(with(ActorMix::Authors, 0), UNTIL + 50);
+    let (gated, ..) = run(with(ActorMix::Answered, UNTIL), UNTIL + 50);
+    assert_ne!(probe(&gated), probe(&authors), "the answered mix after it");
 }

@@ -7,6 +7,9 @@
 //!   run count as failed), at least `unanswered`. The first gate shut H's extrapolation off at
 //!   the N-th success and Placing's learner then lost the task; this one follows the learner
 //!   both ways: failing, it follows the critic's extrapolation of the answers; succeeding, Q.
+//! - `mix_authors_until = N`: full weight until the run's step N, then as the other gates or
+//!   the configured `unanswered` say. It follows the run's clock, not its outcomes: while an
+//!   opening answers a share of every state's visits, H is constrained wherever the learner goes.
 
 use std::collections::VecDeque;
 
@@ -33,15 +36,16 @@ impl MixGate {
         self.recent.push_back(success);
     }
 
-    /// The weight on unanswered rows for the next update, where a gate sets it (`None`: the
-    /// config's `unanswered`), after `successes` successful episodes.
+    /// The weight on unanswered rows for the update after the run's `step`-th step, where a
+    /// gate sets it (`None`: the config's `unanswered`), after `successes` successful episodes.
     pub fn unanswered_weight(
         &self,
+        step: u64,
         successes: u64,
         critic: Option<&HumanCriticConfig>,
     ) -> Option<f32> {
         let critic = critic?;
-        if reads_h_everywhere(successes, Some(critic)) {
+        if step < critic.authors_until || reads_h_everywhere(successes, Some(critic)) {
             return Some(1.0);
         }
         let window = critic.failure_window as usize;
@@ -78,7 +82,7 @@ mod tests {
         let c = critic(0, 4, 0.0);
         let mut gate = MixGate::default();
         // Episodes not yet run count as failed: a new run follows H everywhere.
-        assert_eq!(gate.unanswered_weight(0, Some(&c)), Some(1.0));
+        assert_eq!(gate.unanswered_weight(0, 0, Some(&c)), Some(1.0));
         for (success, weight) in [
             (true, 0.75),
             (true, 0.5),
@@ -90,11 +94,11 @@ mod tests {
             (false, 0.25),
         ] {
             gate.record(success, Some(&c));
-            assert_eq!(gate.unanswered_weight(0, Some(&c)), Some(weight));
+            assert_eq!(gate.unanswered_weight(0, 0, Some(&c)), Some(weight));
         }
         // At least the configured share.
         assert_eq!(
-            gate.unanswered_weight(0, Some(&critic(0, 4, 0.5))),
+            gate.unanswered_weight(0, 0, Some(&critic(0, 4, 0.5))),
             Some(0.5)
         );
     }
@@ -103,12 +107,40 @@ mod tests {
     fn the_success_gate_opens_full_until_its_count_and_off_is_off() {
         let gate = MixGate::default();
         let c = critic(3, 0, 0.0);
-        assert_eq!(gate.unanswered_weight(2, Some(&c)), Some(1.0));
-        assert_eq!(gate.unanswered_weight(3, Some(&c)), None);
-        assert_eq!(gate.unanswered_weight(0, Some(&critic(0, 0, 0.2))), None);
-        assert_eq!(gate.unanswered_weight(0, None), None);
+        assert_eq!(gate.unanswered_weight(0, 2, Some(&c)), Some(1.0));
+        assert_eq!(gate.unanswered_weight(0, 3, Some(&c)), None);
+        assert_eq!(gate.unanswered_weight(0, 0, Some(&critic(0, 0, 0.2))), None);
+        assert_eq!(gate.unanswered_weight(0, 0, None), None);
         let mut off = MixGate::default();
         off.record(true, Some(&critic(0, 0, 0.0)));
         assert_eq!(off, MixGate::default(), "nothing kept while off");
+    }
+
+    #[test]
+    fn the_step_gate_reads_h_everywhere_until_its_step_then_yields_to_the_rest() {
+        let gate = MixGate::default();
+        let until = |n: u64, unanswered: f32, failure_window: u32| HumanCriticConfig {
+            authors_until: n,
+            ..critic(0, failure_window, unanswered)
+        };
+        let c = until(30_000, 0.0, 0);
+        assert_eq!(gate.unanswered_weight(0, 0, Some(&c)), Some(1.0));
+        assert_eq!(gate.unanswered_weight(29_999, 5, Some(&c)), Some(1.0));
+        // From its step on: the configured share, as if the gate were not there.
+        assert_eq!(gate.unanswered_weight(30_000, 0, Some(&c)), None);
+        // ... or what another gate says (a new run's window counts every episode as failed).
+        let with_window = until(30_000, 0.0, 4);
+        let mut window = MixGate::default();
+        for success in [true, true, true] {
+            window.record(success, Some(&with_window));
+        }
+        assert_eq!(
+            window.unanswered_weight(10, 3, Some(&with_window)),
+            Some(1.0)
+        );
+        assert_eq!(
+            window.unanswered_weight(30_000, 3, Some(&with_window)),
+            Some(0.25)
+        );
     }
 }

@@ -105,6 +105,15 @@ pub struct HumanCriticConfig {
     /// answered. 0: off. Left out of a run's config while 0.
     #[serde(default, skip_serializing_if = "is_zero_count")]
     pub failure_window: u32,
+    /// `mix_authors_until` (our choice, with [`ActorMix::Answered`]): until the run's step N
+    /// the actor reads H on every sampled row at full weight (the authors' mix), and as the
+    /// answered mix after it. Lunar Lander's opening answers 0.45 of every state's visits for
+    /// its first 30,000 steps, so H is constrained wherever the learner goes while it lasts;
+    /// the answered mix leaves the actor to Q alone on the other rows, and on two of its ten
+    /// seeds the env critic ran away inside the opening, which EF-100 (H on every row) did not
+    /// on the same seeds. 0: off. Left out of a run's config while 0.
+    #[serde(default, skip_serializing_if = "is_zero_steps")]
+    pub authors_until: u64,
     /// `mix_unread_to_q` (our choice, with [`ActorMix::Answered`]): the share of H's weight
     /// the actor does not read on a row goes to Q, so every row's weights sum to 1 (Q alone,
     /// as SAC, where H is not read at all). Without it a row with H unread keeps Q at 0.1: a
@@ -131,6 +140,10 @@ fn is_zero_count(n: &u32) -> bool {
     *n == 0
 }
 
+fn is_zero_steps(n: &u64) -> bool {
+    *n == 0
+}
+
 impl Default for HumanCriticConfig {
     fn default() -> Self {
         Self {
@@ -142,6 +155,7 @@ impl Default for HumanCriticConfig {
             answered_after: 0,
             agree_within: 0.0,
             failure_window: 0,
+            authors_until: 0,
             unread_to_q: false,
             answer_replay: false,
         }

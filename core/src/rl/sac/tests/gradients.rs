@@ -249,6 +249,7 @@ fn actor_loss_gradient_authors_mix() {
         answered_after: 0,
         agree_within: 0.0,
         failure_window: 0,
+        authors_until: 0,
         unread_to_q: false,
         answer_replay: false,
     };
@@ -266,6 +267,7 @@ fn actor_loss_gradient_paper_mix() {
         answered_after: 0,
         agree_within: 0.0,
         failure_window: 0,
+        authors_until: 0,
         unread_to_q: false,
         answer_replay: false,
     };
@@ -284,6 +286,7 @@ fn actor_loss_gradient_answered_mix() {
             answered_after: 0,
             agree_within: 0.0,
             failure_window: 0,
+            authors_until: 0,
             unread_to_q: false,
             answer_replay: false,
         };
@@ -305,6 +308,7 @@ fn actor_loss_gradient_answered_mix_where_the_heads_agree() {
         answered_after: 0,
         agree_within: 0.05,
         failure_window: 0,
+        authors_until: 0,
         unread_to_q: false,
         answer_replay: false,
     };
@@ -322,6 +326,7 @@ fn actor_loss_gradient_answered_mix_with_h_unread_weight_on_q() {
         answered_after: 0,
         agree_within: 0.0,
         failure_window: 0,
+        authors_until: 0,
         unread_to_q: true,
         answer_replay: false,
     };
@@ -386,6 +391,7 @@ fn answered_mix_reads_h_on_answered_rows_only() {
             answered_after: 0,
             agree_within: 0.0,
             failure_window: 0,
+            authors_until: 0,
             unread_to_q: false,
             answer_replay: false,
         };
@@ -442,6 +448,7 @@ fn the_answered_mix_reads_h_where_the_heads_agree() {
             answered_after: 0,
             agree_within,
             failure_window: 0,
+            authors_until: 0,
             unread_to_q: false,
             answer_replay: false,
         };
