@@ -53,6 +53,7 @@ fn per_task_table() {
                 answered_after: 0,
                 agree_within: 0.0,
                 failure_window: 0,
+                authors_until: 0,
                 unread_to_q: false,
                 answer_replay: false,
             })
