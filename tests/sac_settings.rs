@@ -54,6 +54,7 @@ fn settings_override_every_sac_key() {
             agree_within: 0.0,
             failure_window: 0,
             authors_until: 0,
+            authors_fade: 0,
             unread_to_q: false,
             answer_replay: false,
         })
@@ -65,6 +66,7 @@ fn settings_override_every_sac_key() {
         ("mix_agree_within", "0.2"),
         ("mix_failure_window", "10"),
         ("mix_authors_until", "30000"),
+        ("mix_authors_fade", "30000"),
         ("mix_unread_to_q", "true"),
     ])
     .unwrap();
@@ -77,9 +79,10 @@ fn settings_override_every_sac_key() {
             critic.agree_within,
             critic.failure_window,
             critic.authors_until,
+            critic.authors_fade,
             critic.unread_to_q
         ),
-        (ActorMix::Answered, 0.3, 10, 0.2, 10, 30_000, true)
+        (ActorMix::Answered, 0.3, 10, 0.2, 10, 30_000, 30_000, true)
     );
     let replayed = sac_with(&[
         ("human_critic_mask", "true"),
@@ -135,6 +138,7 @@ fn settings_reject_unknown_keys_and_bad_values_clearly() {
         ("mix_failure_window", "-1", "invalid"),
         ("mix_authors_until", "30000", "mix = \"answered\""),
         ("mix_authors_until", "-1", "invalid"),
+        ("mix_authors_fade", "30000", "mix = \"answered\""),
         ("mix_unread_to_q", "true", "mix = \"answered\""),
         ("mix_unread_to_q", "1", "invalid type"),
         (

@@ -54,6 +54,7 @@ fn per_task_table() {
                 agree_within: 0.0,
                 failure_window: 0,
                 authors_until: 0,
+                authors_fade: 0,
                 unread_to_q: false,
                 answer_replay: false,
             })

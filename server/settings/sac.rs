@@ -108,6 +108,10 @@ pub struct HumanCriticSection {
     /// the run's step N (the authors' mix), and as the answered mix after it (0: off).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mix_authors_until: Option<u64>,
+    /// With `mix = "answered"`: after `mix_authors_until`, H's weight on unanswered
+    /// transitions falls in a straight line from 1 to `mix_unanswered` over N steps (0: at once).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mix_authors_fade: Option<u64>,
     /// With `mix = "answered"`: the share of H's weight the actor does not read on a
     /// transition goes to Q (each transition's weights sum to 1).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -213,6 +217,7 @@ impl HumanCriticSection {
             mix_agree_within: Some(critic.agree_within),
             mix_failure_window: Some(critic.failure_window),
             mix_authors_until: Some(critic.authors_until),
+            mix_authors_fade: Some(critic.authors_fade),
             mix_unread_to_q: Some(critic.unread_to_q),
         }
     }
@@ -305,6 +310,10 @@ impl HumanCriticSection {
         if let Some(n) = self.mix_authors_until {
             answered_mix_only(sac, "mix_authors_until", n > 0, "gates the answered mix")?;
             critic(sac).authors_until = n;
+        }
+        if let Some(n) = self.mix_authors_fade {
+            answered_mix_only(sac, "mix_authors_fade", n > 0, "fades the answered mix in")?;
+            critic(sac).authors_fade = n;
         }
         if let Some(on) = self.mix_unread_to_q {
             answered_mix_only(sac, "mix_unread_to_q", on, "gives Q H's unread weight")?;

@@ -10,6 +10,8 @@
 //! - `mix_authors_until = N`: full weight until the run's step N, then as the other gates or
 //!   the configured `unanswered` say. It follows the run's clock, not its outcomes: while an
 //!   opening answers a share of every state's visits, H is constrained wherever the learner goes.
+//!   With `mix_authors_fade = F` the weight then falls in a straight line to the configured
+//!   `unanswered` over F steps (never below what another gate says).
 
 use std::collections::VecDeque;
 
@@ -48,14 +50,26 @@ impl MixGate {
         if step < critic.authors_until || reads_h_everywhere(successes, Some(critic)) {
             return Some(1.0);
         }
+        let fading = fading_weight(step, critic);
         let window = critic.failure_window as usize;
         if window == 0 {
-            return None;
+            return fading;
         }
         let succeeded = self.recent.iter().filter(|&&s| s).count().min(window);
         let failed = (window - succeeded) as f32 / window as f32;
-        Some(failed.max(critic.unanswered))
+        Some(failed.max(critic.unanswered).max(fading.unwrap_or(0.0)))
     }
+}
+
+/// `mix_authors_fade`'s weight at `step` (past `authors_until`): from 1 down to `unanswered` in
+/// a straight line over `authors_fade` steps; `None` once it has run its course or while off.
+fn fading_weight(step: u64, critic: &HumanCriticConfig) -> Option<f32> {
+    let into = step - critic.authors_until;
+    if into >= critic.authors_fade {
+        return None;
+    }
+    let left = 1.0 - into as f32 / critic.authors_fade as f32;
+    Some(left.max(critic.unanswered))
 }
 
 /// Whether `mix_answered_after`'s gate is open after `successes` successful episodes: the actor
@@ -142,5 +156,49 @@ mod tests {
             window.unanswered_weight(30_000, 3, Some(&with_window)),
             Some(0.25)
         );
+    }
+
+    #[test]
+    fn the_fade_takes_the_weight_down_in_a_straight_line_then_leaves_it() {
+        let gate = MixGate::default();
+        let fade = |unanswered: f32, failure_window: u32| HumanCriticConfig {
+            authors_until: 1_000,
+            authors_fade: 400,
+            ..critic(0, failure_window, unanswered)
+        };
+        let c = fade(0.0, 0);
+        for (step, weight) in [(999, Some(1.0)), (1_000, Some(1.0)), (1_100, Some(0.75))] {
+            assert_eq!(gate.unanswered_weight(step, 0, Some(&c)), weight);
+        }
+        assert_eq!(gate.unanswered_weight(1_300, 0, Some(&c)), Some(0.25));
+        assert_eq!(
+            gate.unanswered_weight(1_400, 0, Some(&c)),
+            None,
+            "its course run"
+        );
+        // Never below the configured share, nor below another gate.
+        assert_eq!(
+            gate.unanswered_weight(1_300, 0, Some(&fade(0.5, 0))),
+            Some(0.5)
+        );
+        let with_window = fade(0.0, 4);
+        let mut window = MixGate::default();
+        for _ in 0..4 {
+            window.record(true, Some(&with_window));
+        }
+        assert_eq!(
+            window.unanswered_weight(1_200, 0, Some(&with_window)),
+            Some(0.5)
+        );
+        assert_eq!(
+            window.unanswered_weight(1_400, 0, Some(&with_window)),
+            Some(0.0)
+        );
+        // From the run's first step when the authors' mix is not kept at all.
+        let from_start = HumanCriticConfig {
+            authors_until: 0,
+            ..c
+        };
+        assert_eq!(gate.unanswered_weight(200, 0, Some(&from_start)), Some(0.5));
     }
 }

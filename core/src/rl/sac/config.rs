@@ -114,6 +114,14 @@ pub struct HumanCriticConfig {
     /// on the same seeds. 0: off. Left out of a run's config while 0.
     #[serde(default, skip_serializing_if = "is_zero_steps")]
     pub authors_until: u64,
+    /// `mix_authors_fade` (our choice, with [`ActorMix::Answered`]): after `authors_until`,
+    /// H's weight on unanswered rows falls in a straight line from 1 to `unanswered` over this
+    /// many steps, rather than at once. With the authors' mix through Lunar Lander's opening
+    /// the env critic of one seed in two ran away within 10k steps of the switch, the actor
+    /// going from H to Q alone on most rows in one step. 0: at once. Left out of a run's config
+    /// while 0.
+    #[serde(default, skip_serializing_if = "is_zero_steps")]
+    pub authors_fade: u64,
     /// `mix_unread_to_q` (our choice, with [`ActorMix::Answered`]): the share of H's weight
     /// the actor does not read on a row goes to Q, so every row's weights sum to 1 (Q alone,
     /// as SAC, where H is not read at all). Without it a row with H unread keeps Q at 0.1: a
@@ -156,6 +164,7 @@ impl Default for HumanCriticConfig {
             agree_within: 0.0,
             failure_window: 0,
             authors_until: 0,
+            authors_fade: 0,
             unread_to_q: false,
             answer_replay: false,
         }

@@ -250,6 +250,7 @@ fn actor_loss_gradient_authors_mix() {
         agree_within: 0.0,
         failure_window: 0,
         authors_until: 0,
+        authors_fade: 0,
         unread_to_q: false,
         answer_replay: false,
     };
@@ -268,6 +269,7 @@ fn actor_loss_gradient_paper_mix() {
         agree_within: 0.0,
         failure_window: 0,
         authors_until: 0,
+        authors_fade: 0,
         unread_to_q: false,
         answer_replay: false,
     };
@@ -287,6 +289,7 @@ fn actor_loss_gradient_answered_mix() {
             agree_within: 0.0,
             failure_window: 0,
             authors_until: 0,
+            authors_fade: 0,
             unread_to_q: false,
             answer_replay: false,
         };
@@ -309,6 +312,7 @@ fn actor_loss_gradient_answered_mix_where_the_heads_agree() {
         agree_within: 0.05,
         failure_window: 0,
         authors_until: 0,
+        authors_fade: 0,
         unread_to_q: false,
         answer_replay: false,
     };
@@ -327,6 +331,7 @@ fn actor_loss_gradient_answered_mix_with_h_unread_weight_on_q() {
         agree_within: 0.0,
         failure_window: 0,
         authors_until: 0,
+        authors_fade: 0,
         unread_to_q: true,
         answer_replay: false,
     };
@@ -392,6 +397,7 @@ fn answered_mix_reads_h_on_answered_rows_only() {
             agree_within: 0.0,
             failure_window: 0,
             authors_until: 0,
+            authors_fade: 0,
             unread_to_q: false,
             answer_replay: false,
         };
@@ -449,6 +455,7 @@ fn the_answered_mix_reads_h_where_the_heads_agree() {
             agree_within,
             failure_window: 0,
             authors_until: 0,
+            authors_fade: 0,
             unread_to_q: false,
             answer_replay: false,
         };

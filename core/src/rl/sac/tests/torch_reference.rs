@@ -182,6 +182,7 @@ fn dref_with_the_authors_mix_agrees_with_pytorch() {
             agree_within: 0.0,
             failure_window: 0,
             authors_until: 0,
+            authors_fade: 0,
             unread_to_q: false,
             answer_replay: false,
         };
@@ -208,6 +209,7 @@ fn dref_with_the_paper_mix_and_mask_agrees_with_pytorch() {
             agree_within: 0.0,
             failure_window: 0,
             authors_until: 0,
+            authors_fade: 0,
             unread_to_q: false,
             answer_replay: false,
         };
