@@ -130,6 +130,15 @@ mod tests {
         assert_eq!(off, MixGate::default(), "nothing kept while off");
     }
 
+    /// A gate that has recorded `outcomes` under `c`.
+    fn after(outcomes: &[bool], c: &HumanCriticConfig) -> MixGate {
+        let mut gate = MixGate::default();
+        for &success in outcomes {
+            gate.record(success, Some(c));
+        }
+        gate
+    }
+
     #[test]
     fn the_step_gate_reads_h_everywhere_until_its_step_then_yields_to_the_rest() {
         let gate = MixGate::default();
@@ -144,10 +153,7 @@ mod tests {
         assert_eq!(gate.unanswered_weight(30_000, 0, Some(&c)), None);
         // ... or what another gate says (a new run's window counts every episode as failed).
         let with_window = until(30_000, 0.0, 4);
-        let mut window = MixGate::default();
-        for success in [true, true, true] {
-            window.record(success, Some(&with_window));
-        }
+        let window = after(&[true; 3], &with_window);
         assert_eq!(
             window.unanswered_weight(10, 3, Some(&with_window)),
             Some(1.0)
@@ -182,10 +188,7 @@ mod tests {
             Some(0.5)
         );
         let with_window = fade(0.0, 4);
-        let mut window = MixGate::default();
-        for _ in 0..4 {
-            window.record(true, Some(&with_window));
-        }
+        let window = after(&[true; 4], &with_window);
         assert_eq!(
             window.unanswered_weight(1_200, 0, Some(&with_window)),
             Some(0.5)

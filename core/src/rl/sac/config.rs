@@ -118,8 +118,9 @@ pub struct HumanCriticConfig {
     /// H's weight on unanswered rows falls in a straight line from 1 to `unanswered` over this
     /// many steps, rather than at once. With the authors' mix through Lunar Lander's opening
     /// the env critic of one seed in two ran away within 10k steps of the switch, the actor
-    /// going from H to Q alone on most rows in one step. 0: at once. Left out of a run's config
-    /// while 0.
+    /// going from H to Q alone on most rows in one step; faded over 30k steps it ran away all
+    /// the same, while H was still read (`docs/dref.md`). 0: at once. Left out of a run's
+    /// config while 0.
     #[serde(default, skip_serializing_if = "is_zero_steps")]
     pub authors_fade: u64,
     /// `mix_unread_to_q` (our choice, with [`ActorMix::Answered`]): the share of H's weight

@@ -243,16 +243,7 @@ fn actor_loss_gradient_authors_mix() {
     let human = HumanCriticConfig {
         lambda: 9.0,
         mix: ActorMix::Authors,
-        mask: false,
-        anchor: 0.0,
-        unanswered: 0.0,
-        answered_after: 0,
-        agree_within: 0.0,
-        failure_window: 0,
-        authors_until: 0,
-        authors_fade: 0,
-        unread_to_q: false,
-        answer_replay: false,
+        ..HumanCriticConfig::default()
     };
     actor_case("actor loss, authors' mix", Some(human));
 }
@@ -262,16 +253,7 @@ fn actor_loss_gradient_paper_mix() {
     let human = HumanCriticConfig {
         lambda: 2.0,
         mix: ActorMix::Paper,
-        mask: false,
-        anchor: 0.0,
-        unanswered: 0.0,
-        answered_after: 0,
-        agree_within: 0.0,
-        failure_window: 0,
-        authors_until: 0,
-        authors_fade: 0,
-        unread_to_q: false,
-        answer_replay: false,
+        ..HumanCriticConfig::default()
     };
     actor_case("actor loss, paper's mix", Some(human));
 }
@@ -283,15 +265,8 @@ fn actor_loss_gradient_answered_mix() {
             lambda: 9.0,
             mix: ActorMix::Answered,
             mask: true,
-            anchor: 0.0,
             unanswered,
-            answered_after: 0,
-            agree_within: 0.0,
-            failure_window: 0,
-            authors_until: 0,
-            authors_fade: 0,
-            unread_to_q: false,
-            answer_replay: false,
+            ..HumanCriticConfig::default()
         };
         actor_case(
             &format!("actor loss, answered mix, unanswered {unanswered}"),
@@ -306,15 +281,8 @@ fn actor_loss_gradient_answered_mix_where_the_heads_agree() {
         lambda: 9.0,
         mix: ActorMix::Answered,
         mask: true,
-        anchor: 0.0,
-        unanswered: 0.0,
-        answered_after: 0,
         agree_within: 0.05,
-        failure_window: 0,
-        authors_until: 0,
-        authors_fade: 0,
-        unread_to_q: false,
-        answer_replay: false,
+        ..HumanCriticConfig::default()
     };
     actor_case("actor loss, answered mix, heads agreeing", Some(human));
 }
@@ -325,15 +293,9 @@ fn actor_loss_gradient_answered_mix_with_h_unread_weight_on_q() {
         lambda: 9.0,
         mix: ActorMix::Answered,
         mask: true,
-        anchor: 0.0,
         unanswered: 0.3,
-        answered_after: 0,
-        agree_within: 0.0,
-        failure_window: 0,
-        authors_until: 0,
-        authors_fade: 0,
         unread_to_q: true,
-        answer_replay: false,
+        ..HumanCriticConfig::default()
     };
     actor_case("actor loss, answered mix, unread weight on Q", Some(human));
 }
@@ -391,15 +353,8 @@ fn answered_mix_reads_h_on_answered_rows_only() {
             lambda: 9.0,
             mix,
             mask: true,
-            anchor: 0.0,
             unanswered,
-            answered_after: 0,
-            agree_within: 0.0,
-            failure_window: 0,
-            authors_until: 0,
-            authors_fade: 0,
-            unread_to_q: false,
-            answer_replay: false,
+            ..HumanCriticConfig::default()
         };
         let mut sac = tiny(Some(config));
         sac.buffers.batch.human.fill(human);
@@ -449,15 +404,8 @@ fn the_answered_mix_reads_h_where_the_heads_agree() {
             lambda: 9.0,
             mix,
             mask: true,
-            anchor: 0.0,
-            unanswered: 0.0,
-            answered_after: 0,
             agree_within,
-            failure_window: 0,
-            authors_until: 0,
-            authors_fade: 0,
-            unread_to_q: false,
-            answer_replay: false,
+            ..HumanCriticConfig::default()
         };
         let mut sac = tiny(Some(config));
         sac.buffers.batch.human.fill(0.0);

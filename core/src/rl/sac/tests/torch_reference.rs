@@ -175,16 +175,7 @@ fn dref_with_the_authors_mix_agrees_with_pytorch() {
         let human = HumanCriticConfig {
             lambda: 9.0,
             mix: ActorMix::Authors,
-            mask: false,
-            anchor: 0.0,
-            unanswered: 0.0,
-            answered_after: 0,
-            agree_within: 0.0,
-            failure_window: 0,
-            authors_until: 0,
-            authors_fade: 0,
-            unread_to_q: false,
-            answer_replay: false,
+            ..HumanCriticConfig::default()
         };
         let worst = check(
             reference_sac(Some(human)),
@@ -203,15 +194,7 @@ fn dref_with_the_paper_mix_and_mask_agrees_with_pytorch() {
             lambda: 2.0,
             mix: ActorMix::Paper,
             mask: true,
-            anchor: 0.0,
-            unanswered: 0.0,
-            answered_after: 0,
-            agree_within: 0.0,
-            failure_window: 0,
-            authors_until: 0,
-            authors_fade: 0,
-            unread_to_q: false,
-            answer_replay: false,
+            ..HumanCriticConfig::default()
         };
         let worst = check(
             reference_sac(Some(human)),
