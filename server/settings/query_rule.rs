@@ -231,6 +231,13 @@ impl QueryRuleSection {
                     ));
                 }
                 c.opening_rate = (rate > 0.0).then_some(rate);
+                // Unpaced, the opening asks as the authors' ranking does: the pace's placement
+                // and taper go with the pace, as an opening's settings go with a closed opening
+                // (Lunar Lander's product opening is placed by visits).
+                if rate == 0.0 {
+                    c.opening_placement = OpeningPlacement::Ranked;
+                    c.opening_taper = false;
+                }
             }
         }
         if let Some(placement) = self.opening_placement {

@@ -280,6 +280,39 @@ fn a_repayment_by_visits_needs_an_opening_repaid_in_part() {
 }
 
 #[test]
+fn unpacing_lunar_landers_opening_takes_its_placement_with_it() {
+    // Lunar Lander's product opening is paced and placed by visits: set to no pace, the config
+    // carries no placement of a pace that does not run, and a placement or taper set beside it
+    // is refused by name.
+    let rule = |pairs: &[(&str, &str)]| ceiling(Task::LunarLander, pairs, EvaluativeMethod::Dref);
+    let product = rule(&[]).unwrap().unwrap();
+    assert_eq!(product.opening_placement, OpeningPlacement::ByVisits);
+    let unpaced = rule(&[("opening_rate", "0")]).unwrap().unwrap();
+    assert_eq!(
+        (
+            unpaced.opening_rate,
+            unpaced.opening_placement,
+            unpaced.opening_taper
+        ),
+        (None, OpeningPlacement::Ranked, false)
+    );
+    assert_eq!(unpaced.opening, product.opening, "the opening itself stays");
+    for (pairs, key) in [
+        (
+            [("opening_rate", "0"), ("opening_placement", "by_visits")],
+            "opening_placement",
+        ),
+        (
+            [("opening_rate", "0"), ("opening_taper", "true")],
+            "opening_taper",
+        ),
+    ] {
+        let e = rule(&pairs).unwrap_err();
+        assert!(e.contains(key) && e.contains("set opening_rate"), "{e}");
+    }
+}
+
+#[test]
 fn a_taper_needs_a_paced_opening() {
     let rule = |pairs: &[(&str, &str)], method| ceiling(Task::LunarLander, pairs, method);
     let product = rule(&[], EvaluativeMethod::Dref).unwrap().unwrap();
