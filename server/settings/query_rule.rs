@@ -230,13 +230,12 @@ impl QueryRuleSection {
                         "the rule has no opening to pace; set feedback_opening too",
                     ));
                 }
-                c.opening_rate = (rate > 0.0).then_some(rate);
-                // Unpaced, the opening asks as the authors' ranking does: the pace's placement
-                // and taper go with the pace, as an opening's settings go with a closed opening
-                // (Lunar Lander's product opening is placed by visits).
-                if rate == 0.0 {
-                    c.opening_placement = OpeningPlacement::Ranked;
-                    c.opening_taper = false;
+                // Unpacing a task's opening unpaces all of it: no placement or taper of a pace
+                // that never runs is left in the run's config (Lunar Lander's is placed by visits).
+                if rate > 0.0 {
+                    c.opening_rate = Some(rate);
+                } else {
+                    *c = c.without_pace();
                 }
             }
         }

@@ -98,6 +98,18 @@ impl FeedbackCeiling {
         }
     }
 
+    /// The same ceiling with its opening unpaced (every step the authors' ranking asks): the
+    /// pace's placement and taper go with it (as [`DEFAULT_CEILING`] has them), so a config
+    /// never carries a placement of a pace that does not run; the opening and its repayment stay.
+    pub fn without_pace(self) -> Self {
+        Self {
+            opening_rate: None,
+            opening_placement: DEFAULT_CEILING.opening_placement,
+            opening_taper: DEFAULT_CEILING.opening_taper,
+            ..self
+        }
+    }
+
     /// The bucket that holds the rule to this ceiling.
     pub fn budget(&self) -> AskBudget {
         let mut budget = AskBudget::new(self.rate, self.burst)
