@@ -18,6 +18,7 @@ mod env_contract;
 mod lunar_lander;
 mod placing;
 mod rl_gradients;
+mod rl_layer_norm;
 mod rl_no_alloc;
 mod sac;
 mod sac_no_alloc;

@@ -148,6 +148,65 @@ fn resuming_from_a_checkpoint_is_bit_identical_to_never_stopping() {
     );
 }
 
+/// `critic_layer_norm`: the env critics' and their targets' norms go into the checkpoint under
+/// PyTorch's names, the actor's and the human critic's networks have none, and a resumed learner
+/// goes on bit for bit.
+#[test]
+fn a_learner_with_layer_normed_critics_resumes_bit_identically() {
+    let replay = random_replay(5, 2, 300, 1);
+    let mut config = small_config(true);
+    config.hidden = vec![16, 8];
+    config.batch_size = 32;
+    config.critic_layer_norm = true;
+    let mut straight = Sac::new(5, 2, config.clone(), 7);
+    let mut resumed = Sac::new(5, 2, config.clone(), 7);
+    for _ in 0..5 {
+        straight.update(&replay).unwrap();
+        resumed.update(&replay).unwrap();
+    }
+    let bytes = resumed.to_safetensors();
+    let names: Vec<String> = safetensors::SafeTensors::deserialize(&bytes)
+        .unwrap()
+        .names()
+        .into_iter()
+        .map(str::to_string)
+        .collect();
+    for net in ["q1", "q2", "q1_target", "q2_target"] {
+        for tensor in [
+            "norms.0.weight",
+            "norms.0.bias",
+            "norms.1.weight",
+            "norms.1.bias",
+        ] {
+            let name = format!("{net}.{tensor}");
+            assert!(names.contains(&name), "{name} missing from {names:?}");
+        }
+    }
+    for net in ["actor", "h1", "h2"] {
+        assert!(
+            !names.iter().any(|n| n.starts_with(&format!("{net}.norms"))),
+            "{net} has no layer norm: {names:?}"
+        );
+    }
+    let mut resumed = Sac::from_safetensors(&bytes).expect("reads its own checkpoint");
+    assert!(resumed.config().critic_layer_norm);
+    for _ in 0..7 {
+        straight.update(&replay).unwrap();
+        resumed.update(&replay).unwrap();
+    }
+    assert_same_checkpoint(&straight.to_safetensors(), &resumed.to_safetensors());
+    // Another learner than the plain one from the same seed.
+    config.critic_layer_norm = false;
+    let mut plain = Sac::new(5, 2, config, 7);
+    for _ in 0..12 {
+        plain.update(&replay).unwrap();
+    }
+    let (mut a, mut b) = ([0.0f32; 2], [0.0f32; 2]);
+    straight.act(&[0.3; 5], true, &mut a);
+    plain.act(&[0.3; 5], true, &mut b);
+    assert_ne!(a, b, "the norms change what the actor learns");
+}
+
 #[test]
 fn checkpoint_names_tensors_like_pytorch() {
     let sac = Sac::new(3, 1, small_config(true), 0);

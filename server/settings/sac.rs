@@ -58,6 +58,10 @@ pub struct SacSection {
     /// variant: bounds each sample's pull on the critic).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub critic_loss: Option<CriticLoss>,
+    /// Layer-normed env critics (`Linear -> LayerNorm -> ReLU`, our learner variant: a critic
+    /// that cannot extrapolate to ever larger values without growing its last layer).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub critic_layer_norm: Option<bool>,
 }
 
 /// DREF's human critic.
@@ -157,6 +161,7 @@ impl SacSection {
                     .map_or(TargetEntropy::Auto(AutoWord::Auto), TargetEntropy::Value),
             ),
             critic_loss: Some(sac.critic_loss),
+            critic_layer_norm: Some(sac.critic_layer_norm),
         }
     }
 
@@ -185,6 +190,9 @@ impl SacSection {
         set_positive(&mut sac.init_ent_coef, self.init_ent_coef, "init_ent_coef")?;
         if let Some(loss) = self.critic_loss {
             sac.critic_loss = loss;
+        }
+        if let Some(on) = self.critic_layer_norm {
+            sac.critic_layer_norm = on;
         }
         match self.target_entropy {
             None => {}

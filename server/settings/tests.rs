@@ -57,6 +57,8 @@ fn unknown_keys_and_wrong_types_are_refused_by_name() {
     assert!(Settings::from_pairs([("ucb", "best")]).is_err());
     let e = Settings::from_pairs([("critic_loss", "l1")]).unwrap_err();
     assert_eq!(e.key(), Some("critic_loss"), "{e}");
+    let e = Settings::from_pairs([("critic_layer_norm", "yes")]).unwrap_err();
+    assert_eq!(e.key(), Some("critic_layer_norm"), "{e}");
     assert!(Settings::from_json(json!({"trajectories": {"a": 1}})).is_err());
     assert!(Settings::from_json(json!({"variant": "robosuite"})).is_err());
 }
@@ -67,7 +69,7 @@ fn evaluative_settings_reach_the_run() {
         "hidden": [32, 32], "c": 0.5, "k": 7, "ucb": "paper", "batch_size": 64,
         "lambda": 2.0, "mix": "paper", "reward_scale": 0.1, "variant": "uniform",
         "release_at": 0.9, "observe_grip": "level", "success": "through", "hoop": "ring",
-        "critic_loss": "huber"
+        "critic_loss": "huber", "critic_layer_norm": true
     }))
     .unwrap();
     let c = dref(Task::Placing, &s).unwrap();
@@ -76,6 +78,13 @@ fn evaluative_settings_reach_the_run() {
     assert_eq!(c.query_rule.form, UcbForm::Paper);
     assert_eq!(c.sac.batch_size, 64);
     assert_eq!(c.sac.critic_loss, CriticLoss::Huber);
+    assert!(c.sac.critic_layer_norm);
+    assert!(
+        !dref(Task::Placing, &Settings::default())
+            .unwrap()
+            .sac
+            .critic_layer_norm
+    );
     let critic = c.sac.human_critic.unwrap();
     assert_eq!((critic.lambda, critic.mix), (2.0, ActorMix::Paper));
     assert_eq!(c.reward_scale, 0.1);

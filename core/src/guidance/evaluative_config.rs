@@ -415,6 +415,7 @@ impl EvaluativeRunConfig {
             target_entropy: None,
             human_critic: human_critic_for(method, ActorMix::Authors),
             critic_loss: CriticLoss::Mse,
+            critic_layer_norm: false,
         };
         // A declared task is asked as Placing is, its opening included.
         let query_rule = QueryRuleConfig::for_method(Task::Placing, method);

@@ -1,6 +1,6 @@
-//! A multi-layer perceptron: `Linear` layers with ReLU between them and a linear output, its
-//! forward pass, its hand-written backward pass, and the parameter plumbing (flat slices, Polyak
-//! averaging, names for checkpoints).
+//! A multi-layer perceptron: `Linear` layers with ReLU between them (optionally a layer norm
+//! before each ReLU) and a linear output, its forward pass, its hand-written backward pass, and
+//! the parameter plumbing (flat slices, Polyak averaging, names for checkpoints).
 //!
 //! # Layout
 //!
@@ -18,6 +18,7 @@
 use rand::Rng;
 
 use super::kernels::{self, DenseLayer};
+use super::layer_norm::{self, LayerNorm};
 use super::linear::Linear;
 use super::workspace::MlpWorkspace;
 
@@ -32,7 +33,9 @@ pub struct ParamTensor<'a> {
     pub data: &'a [f32],
 }
 
-/// `n_in -> hidden[0] -> ... -> n_out`, ReLU after every hidden layer, linear output.
+/// `n_in -> hidden[0] -> ... -> n_out`, ReLU after every hidden layer, linear output; with
+/// [`Mlp::with_layer_norm`], `relu(LayerNorm(z))` after every hidden layer (PyTorch's
+/// `Linear -> LayerNorm -> ReLU`).
 ///
 /// All parameters live in one flat vector (and their gradients in a second one of the same
 /// layout) so that Adam, Polyak averaging and copying are single loops over one slice, and a
@@ -45,6 +48,8 @@ pub struct ParamTensor<'a> {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Mlp {
     layers: Vec<Linear>,
+    /// One per hidden layer, or none; their parameters follow every layer's in `params`.
+    norms: Vec<LayerNorm>,
     params: Vec<f32>,
     grads: Vec<f32>,
 }
@@ -89,9 +94,37 @@ impl Mlp {
             .collect();
         Self {
             layers,
+            norms: Vec::new(),
             params: vec![0.0; offset],
             grads: vec![0.0; offset],
         }
+    }
+
+    /// The same network with a layer norm before each hidden ReLU, PyTorch's initialisation
+    /// (gain 1, bias 0): its parameters go after every layer's, as a module's `layers` then
+    /// `norms` lists give them, so the layers keep their offsets and a generator draws the same
+    /// layers with or without. No-op on a network that has them already.
+    pub fn with_layer_norm(mut self) -> Self {
+        if !self.norms.is_empty() {
+            return self;
+        }
+        let last = self.layers.len() - 1;
+        for layer in &self.layers[..last] {
+            let norm = LayerNorm {
+                n: layer.n_out,
+                offset: self.params.len(),
+            };
+            self.params.extend(std::iter::repeat_n(1.0, norm.n));
+            self.params.extend(std::iter::repeat_n(0.0, norm.n));
+            self.norms.push(norm);
+        }
+        self.grads = vec![0.0; self.params.len()];
+        self
+    }
+
+    /// Whether each hidden layer is normalised before its ReLU.
+    pub fn has_layer_norm(&self) -> bool {
+        !self.norms.is_empty()
     }
 
     pub fn n_in(&self) -> usize {
@@ -108,7 +141,7 @@ impl Mlp {
 
     /// A workspace for batches of `batch` samples (allocates; keep it across updates).
     pub fn workspace(&self, batch: usize) -> MlpWorkspace {
-        MlpWorkspace::new(&self.layers, batch)
+        MlpWorkspace::new(&self.layers, batch, self.has_layer_norm())
     }
 
     /// All parameters, flat, in PyTorch's `parameters()` order.
@@ -140,8 +173,8 @@ impl Mlp {
 
     /// `self = online` (parameters only), e.g. to initialise a target network.
     pub fn copy_params_from(&mut self, online: &Mlp) {
-        assert_eq!(
-            self.layers, online.layers,
+        assert!(
+            self.layers == online.layers && self.norms == online.norms,
             "copy between networks of different shapes"
         );
         self.params.copy_from_slice(&online.params);
@@ -150,8 +183,8 @@ impl Mlp {
     /// Polyak averaging `self = (1 - tau) self + tau online`, written as stable-baselines3's
     /// `polyak_update` (`mul_(1 - tau)` then `add_(online, alpha = tau)`).
     pub fn soft_update_from(&mut self, online: &Mlp, tau: f32) {
-        assert_eq!(
-            self.layers, online.layers,
+        assert!(
+            self.layers == online.layers && self.norms == online.norms,
             "Polyak update between networks of different shapes"
         );
         for (target, &param) in self.params.iter_mut().zip(&online.params) {
@@ -160,9 +193,10 @@ impl Mlp {
     }
 
     /// Parameter tensors with PyTorch names (`layers.0.weight`, `layers.0.bias`, ...), as a
-    /// `ModuleList` of `nn.Linear` called `layers` would name them.
+    /// `ModuleList` of `nn.Linear` called `layers` would name them, then the layer norms'
+    /// (`norms.0.weight`, `norms.0.bias`, ...) as a second `ModuleList` called `norms` would.
     pub fn named_parameters(&self) -> impl Iterator<Item = ParamTensor<'_>> {
-        self.layers.iter().enumerate().flat_map(move |(l, layer)| {
+        let layers = self.layers.iter().enumerate().flat_map(move |(l, layer)| {
             [
                 ParamTensor {
                     name: format!("layers.{l}.weight"),
@@ -175,14 +209,29 @@ impl Mlp {
                     data: layer.bias(&self.params),
                 },
             ]
-        })
+        });
+        let norms = self.norms.iter().enumerate().flat_map(move |(l, norm)| {
+            [
+                ParamTensor {
+                    name: format!("norms.{l}.weight"),
+                    shape: vec![norm.n],
+                    data: &self.params[norm.gain_range()],
+                },
+                ParamTensor {
+                    name: format!("norms.{l}.bias"),
+                    shape: vec![norm.n],
+                    data: &self.params[norm.bias_range()],
+                },
+            ]
+        });
+        layers.chain(norms)
     }
 
     /// Forward pass of the batch in `ws.input_mut()`; the result is `ws.output()`. Keeps every
     /// hidden activation in `ws` for the backward pass. Allocates nothing of its own (on the
     /// portable path each product does, inside `sgemm`: see the module map of `rl`).
     pub fn forward(&self, ws: &mut MlpWorkspace) {
-        ws.check_shape(&self.layers);
+        ws.check_shape(&self.layers, self.has_layer_norm());
         let last = self.layers.len() - 1;
         for (l, layer) in self.layers.iter().enumerate() {
             let (before, after) = ws.activations.split_at_mut(l + 1);
@@ -190,7 +239,16 @@ impl Mlp {
                 layer,
                 params: &self.params,
             };
-            kernels::forward_layer(d, &before[l], &mut after[0], l < last);
+            let norm = self.norms.get(l);
+            kernels::forward_layer(d, &before[l], &mut after[0], l < last && norm.is_none());
+            if let Some(norm) = norm {
+                layer_norm::forward_relu(
+                    norm,
+                    &self.params,
+                    after[0].as_mut_slice(),
+                    &mut ws.norms[l],
+                );
+            }
         }
     }
 
@@ -198,19 +256,22 @@ impl Mlp {
     /// [`Mlp::forward`]): accumulates dL/d parameters into [`Mlp::grads`]. Does not compute the
     /// input gradient (that saves the first layer's third product).
     pub fn backward(&mut self, ws: &mut MlpWorkspace) {
-        backward(&self.layers, &self.params, Some(&mut self.grads), ws, false);
+        let shape = Shape::of(&self.layers, &self.norms);
+        backward(shape, &self.params, Some(&mut self.grads), ws, false);
     }
 
     /// [`Mlp::backward`] plus dL/d input into `ws.input_grad()`.
     pub fn backward_with_input_grad(&mut self, ws: &mut MlpWorkspace) {
-        backward(&self.layers, &self.params, Some(&mut self.grads), ws, true);
+        let shape = Shape::of(&self.layers, &self.norms);
+        backward(shape, &self.params, Some(&mut self.grads), ws, true);
     }
 
     /// dL/d input into `ws.input_grad()` only, the parameter gradients untouched: a frozen
     /// network, such as SAC's critic inside the actor loss. Takes `&self`, so the borrow checker
     /// proves the critic unchanged.
     pub fn backward_input(&self, ws: &mut MlpWorkspace) {
-        backward(&self.layers, &self.params, None, ws, true);
+        let shape = Shape::of(&self.layers, &self.norms);
+        backward(shape, &self.params, None, ws, true);
     }
 
     /// [`Mlp::backward_input`] of the samples `columns` of `ws` only (after a forward pass and
@@ -224,11 +285,15 @@ impl Mlp {
         columns: &[usize],
         sub: &mut MlpWorkspace,
     ) {
-        ws.check_shape(&self.layers);
+        ws.check_shape(&self.layers, self.has_layer_norm());
         sub.gather_for_input_grad(ws, columns);
         let m = columns.len();
         for (l, layer) in self.layers.iter().enumerate().rev() {
             let (below, above) = sub.grads.split_at_mut(l + 1);
+            if let Some(norm) = self.norms.get(l) {
+                let dy = above[0].as_mut_slice();
+                layer_norm::backward(norm, &self.params, None, dy, &sub.norms[l], m);
+            }
             let dz = &above[0].as_slice()[..layer.n_out * m];
             let dx = &mut below[l].as_mut_slice()[..layer.n_in * m];
             let relu_output = (l > 0).then(|| &sub.activations[l].as_slice()[..layer.n_in * m]);
@@ -241,19 +306,39 @@ impl Mlp {
     }
 }
 
+/// A network's layers and layer norms (none, or one per hidden layer).
+#[derive(Clone, Copy)]
+struct Shape<'a> {
+    layers: &'a [Linear],
+    norms: &'a [LayerNorm],
+}
+
+impl<'a> Shape<'a> {
+    fn of(layers: &'a [Linear], norms: &'a [LayerNorm]) -> Self {
+        Self { layers, norms }
+    }
+}
+
 /// Layer by layer from the output: `ws.grads[l + 1]` holds dL/dz of layer `l` (for a hidden layer,
-/// dL/dh already masked by the ReLU derivative), from which come
-/// `dW^T += x dz^T`, `db += sum over the batch of dz`, and `dx = W^T dz`.
+/// dL/dh already masked by the ReLU derivative, and taken back through the layer norm first if
+/// there is one), from which come `dW^T += x dz^T`, `db += sum over the batch of dz`, and
+/// `dx = W^T dz`.
 fn backward(
-    layers: &[Linear],
+    Shape { layers, norms }: Shape<'_>,
     params: &[f32],
     mut param_grads: Option<&mut [f32]>,
     ws: &mut MlpWorkspace,
     input_grad: bool,
 ) {
-    ws.check_shape(layers);
+    ws.check_shape(layers, !norms.is_empty());
+    let batch = ws.batch();
     for (l, layer) in layers.iter().enumerate().rev() {
         let (below, above) = ws.grads.split_at_mut(l + 1);
+        if let Some(norm) = norms.get(l) {
+            let dy = above[0].as_mut_slice();
+            let grads = param_grads.as_deref_mut();
+            layer_norm::backward(norm, params, grads, dy, &ws.norms[l], batch);
+        }
         let dz = &above[0];
         if let Some(grads) = param_grads.as_deref_mut() {
             kernels::weight_grad(layer, grads, &ws.activations[l], dz);

@@ -5,6 +5,8 @@
 //! ## Map
 //!
 //! - [`linear`]: [`Linear`], where one layer's weight and bias sit in the flat parameter vector.
+//! - [`layer_norm`]: a hidden layer's optional layer norm (fused with its ReLU) and its backward
+//!   pass; where its gain and bias sit.
 //! - [`mlp`]: [`Mlp`]: PyTorch's initialisation, forward, backward (parameter
 //!   and/or input gradients), parameters as one flat slice, Polyak averaging, tensor names for
 //!   checkpoints. Its module doc explains the memory layout.
@@ -90,6 +92,7 @@
 
 pub mod adam;
 pub mod kernels;
+pub mod layer_norm;
 pub mod linear;
 pub mod loss;
 pub mod mlp;

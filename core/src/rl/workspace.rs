@@ -2,6 +2,7 @@
 
 use nalgebra::DMatrix;
 
+use super::layer_norm::NormCache;
 use super::linear::Linear;
 
 /// Every activation and every activation gradient of one network shape at one batch size,
@@ -19,18 +20,23 @@ use super::linear::Linear;
 ///   with the gradient already through its ReLU, and `grads[0]` only when the input gradient is
 ///   asked for.
 ///
+/// - `norms[l]`, for a network with layer norms ([`crate::rl::Mlp::with_layer_norm`]), what hidden
+///   layer `l + 1`'s norm keeps for its backward pass; empty otherwise.
+///
 /// A workspace fits any network of its shape: SAC's twin critics can share one, as long as each
-/// critic's backward pass runs before the other's forward pass overwrites the activations.
+/// critic's backward pass runs before the other's forward pass overwrites the activations. One
+/// made for a network with layer norms also fits the same shape without them.
 #[derive(Clone, Debug)]
 pub struct MlpWorkspace {
     batch: usize,
     sizes: Vec<usize>,
     pub(super) activations: Vec<DMatrix<f32>>,
     pub(super) grads: Vec<DMatrix<f32>>,
+    pub(super) norms: Vec<NormCache>,
 }
 
 impl MlpWorkspace {
-    pub(super) fn new(layers: &[Linear], batch: usize) -> Self {
+    pub(super) fn new(layers: &[Linear], batch: usize, layer_norm: bool) -> Self {
         assert!(batch > 0, "empty batch");
         let sizes: Vec<usize> = std::iter::once(layers[0].n_in)
             .chain(layers.iter().map(|l| l.n_out))
@@ -41,16 +47,30 @@ impl MlpWorkspace {
                 .map(|&n| DMatrix::zeros(n, batch))
                 .collect::<Vec<_>>()
         };
+        let last = sizes.len() - 1;
+        let norms = match layer_norm {
+            true => sizes[1..last]
+                .iter()
+                .map(|&n| NormCache::new(n, batch))
+                .collect(),
+            false => Vec::new(),
+        };
         Self {
             batch,
             activations: buffers(),
             grads: buffers(),
+            norms,
             sizes,
         }
     }
 
-    /// Panics unless this workspace was made for a network with these layers.
-    pub(super) fn check_shape(&self, layers: &[Linear]) {
+    /// Panics unless this workspace was made for a network with these layers (and layer norms,
+    /// if `layer_norm`).
+    pub(super) fn check_shape(&self, layers: &[Linear], layer_norm: bool) {
+        assert!(
+            !layer_norm || !self.norms.is_empty(),
+            "a workspace without layer norms used with a network that has them"
+        );
         let same = self.sizes.len() == layers.len() + 1
             && self.sizes[0] == layers[0].n_in
             && layers
@@ -106,8 +126,9 @@ impl MlpWorkspace {
         &self.grads[0]
     }
 
-    /// Copy what an input-gradient pass reads, the hidden ReLU outputs and dL/d output, of the
-    /// samples `columns` of `from` into this workspace's first `columns.len()` columns.
+    /// Copy what an input-gradient pass reads, the hidden ReLU outputs, what their layer norms
+    /// kept (if `from` has them), and dL/d output, of the samples `columns` of `from` into this
+    /// workspace's first `columns.len()` columns.
     pub(super) fn gather_for_input_grad(&mut self, from: &MlpWorkspace, columns: &[usize]) {
         assert_eq!(self.sizes, from.sizes, "workspaces of different shapes");
         assert!(
@@ -121,10 +142,24 @@ impl MlpWorkspace {
         let output_grad = std::iter::once((&mut self.grads[last], &from.grads[last]));
         for (to, from) in hidden.chain(output_grad) {
             let n = to.nrows();
-            let (to, from) = (to.as_mut_slice(), from.as_slice());
-            for (c, &j) in columns.iter().enumerate() {
-                to[c * n..(c + 1) * n].copy_from_slice(&from[j * n..(j + 1) * n]);
+            gather_columns(to.as_mut_slice(), from.as_slice(), n, columns);
+        }
+        if !from.norms.is_empty() {
+            assert!(
+                !self.norms.is_empty(),
+                "gathering layer norms into a workspace without them"
+            );
+            for ((to, from), &n) in self.norms.iter_mut().zip(&from.norms).zip(&self.sizes[1..]) {
+                gather_columns(&mut to.normalized, &from.normalized, n, columns);
+                gather_columns(&mut to.inv_std, &from.inv_std, 1, columns);
             }
         }
+    }
+}
+
+/// Column `columns[c]` of `from` into column `c` of `to`, both column-major with `n` rows.
+fn gather_columns(to: &mut [f32], from: &[f32], n: usize, columns: &[usize]) {
+    for (c, &j) in columns.iter().enumerate() {
+        to[c * n..(c + 1) * n].copy_from_slice(&from[j * n..(j + 1) * n]);
     }
 }

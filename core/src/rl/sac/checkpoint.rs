@@ -164,6 +164,11 @@ impl Sac {
 
         let (obs_dim, act_dim, hidden) = (dims.obs_dim, dims.act_dim, config.hidden.clone());
         let critic = || Mlp::zeros(obs_dim + act_dim, &hidden, 1);
+        let layer_norm = config.critic_layer_norm;
+        let env_critic = || match layer_norm {
+            true => critic().with_layer_norm(),
+            false => critic(),
+        };
         let actor = Mlp::zeros(obs_dim, &hidden, 2 * act_dim);
         let human = config.human_critic.is_some().then(|| (critic(), critic()));
         let rng = rng.restore().map_err(|e| CheckpointError::BadMetadata {
@@ -175,7 +180,7 @@ impl Sac {
             act_dim,
             config,
             actor,
-            [critic(), critic()],
+            [env_critic(), env_critic()],
             human,
             rng,
         );

@@ -32,6 +32,17 @@ pub struct SacConfig {
     /// so earlier configs read as they were.
     #[serde(default, skip_serializing_if = "CriticLoss::is_mse")]
     pub critic_loss: CriticLoss,
+    /// Our choice (the setting `critic_layer_norm`), a learner of its own: the environment
+    /// critics (and their targets) normalise each hidden layer before its ReLU
+    /// ([`crate::rl::Mlp::with_layer_norm`], PyTorch's `Linear -> LayerNorm -> ReLU`). On Lunar
+    /// Lander the runs that end lowest are those whose env critic values the policy far above
+    /// anything it earns, with the mse loss and with Huber alike; a normalised critic cannot
+    /// reach ever larger values on inputs unlike its data without growing its last layer, the
+    /// overestimation that layer norm curbs in SAC's critics (Ball et al. 2023; Nauman et al.
+    /// 2024). The actor and the human critic stay as they are. Left out of a run's config while
+    /// off, so earlier configs read as they were.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub critic_layer_norm: bool,
 }
 
 /// The loss the environment critics Q_1, Q_2 regress their soft Bellman targets with (Eq. 4).
@@ -212,6 +223,7 @@ impl SacConfig {
             target_entropy: None,
             human_critic: Some(HumanCriticConfig::default()),
             critic_loss: CriticLoss::Mse,
+            critic_layer_norm: false,
         }
     }
 }

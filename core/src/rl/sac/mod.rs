@@ -102,8 +102,17 @@ impl Sac {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let hidden = &config.hidden;
         let actor = Mlp::new(obs_dim, hidden, 2 * act_dim, &mut rng);
-        let q1 = Mlp::new(obs_dim + act_dim, hidden, 1, &mut rng);
-        let q2 = Mlp::new(obs_dim + act_dim, hidden, 1, &mut rng);
+        let env_critic = |rng: &mut ChaCha8Rng| {
+            let q = Mlp::new(obs_dim + act_dim, hidden, 1, rng);
+            // Layer norms draw nothing: the same seed gives the same layers with or without.
+            if config.critic_layer_norm {
+                q.with_layer_norm()
+            } else {
+                q
+            }
+        };
+        let q1 = env_critic(&mut rng);
+        let q2 = env_critic(&mut rng);
         let human = config.human_critic.is_some().then(|| {
             let h1 = Mlp::new(obs_dim + act_dim, hidden, 1, &mut rng);
             let h2 = Mlp::new(obs_dim + act_dim, hidden, 1, &mut rng);

@@ -14,7 +14,14 @@ const TOLERANCE: f64 = 2e-3;
 const ENT_COEF: f32 = 0.7;
 
 fn tiny(human: Option<HumanCriticConfig>) -> Sac {
-    let mut sac = Sac::new(3, 2, tiny_config(&[6, 5], 7, human), 3);
+    tiny_with(human, false)
+}
+
+/// [`tiny`], its env critics layer-normed if `critic_layer_norm`.
+fn tiny_with(human: Option<HumanCriticConfig>, critic_layer_norm: bool) -> Sac {
+    let mut config = tiny_config(&[6, 5], 7, human);
+    config.critic_layer_norm = critic_layer_norm;
+    let mut sac = Sac::new(3, 2, config, 3);
     fill_fixed_batch_and_noise(&mut sac);
     sac
 }
@@ -68,7 +75,16 @@ fn check(
 
 #[test]
 fn critic_loss_gradient() {
-    let mut sac = tiny(None);
+    critic_case(tiny(None));
+}
+
+/// The critics' gain and bias gradients included.
+#[test]
+fn critic_loss_gradient_with_layer_norms() {
+    critic_case(tiny_with(None, true));
+}
+
+fn critic_case(mut sac: Sac) {
     sac.compute_target_q_values(ENT_COEF);
     sac.critic_loss();
     let (g1, g2) = (sac.q1.grads().to_vec(), sac.q2.grads().to_vec());
@@ -217,7 +233,10 @@ fn masked_human_critic_skips_a_batch_without_feedback() {
 /// The actor loss as a function of the actor's parameters: resample `a_pi` (same noise), then
 /// the loss through the frozen critics.
 fn actor_case(name: &str, human: Option<HumanCriticConfig>) {
-    let mut sac = tiny(human);
+    actor_case_on(name, tiny(human));
+}
+
+fn actor_case_on(name: &str, mut sac: Sac) {
     let critics_before = (sac.q1.clone(), sac.q2.clone());
     sac.sample_policy_at_obs();
     sac.actor_loss(ENT_COEF);
@@ -246,6 +265,21 @@ fn actor_loss_gradient_authors_mix() {
         ..HumanCriticConfig::default()
     };
     actor_case("actor loss, authors' mix", Some(human));
+}
+
+/// Through the layer norms of the frozen env critics' input gradient.
+#[test]
+fn actor_loss_gradient_through_layer_normed_critics() {
+    let human = HumanCriticConfig {
+        lambda: 9.0,
+        mix: ActorMix::Authors,
+        ..HumanCriticConfig::default()
+    };
+    actor_case_on("actor loss, normed critics", tiny_with(Some(human), true));
+    actor_case_on(
+        "actor loss, normed critics, plain SAC",
+        tiny_with(None, true),
+    );
 }
 
 #[test]

@@ -24,6 +24,7 @@ fn tiny_config(hidden: &[usize], batch: usize, human: Option<HumanCriticConfig>)
         target_entropy: Some(-2.0),
         human_critic: human,
         critic_loss: CriticLoss::Mse,
+        critic_layer_norm: false,
     }
 }
 
