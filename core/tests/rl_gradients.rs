@@ -1,5 +1,7 @@
-//! The MLP's gradients, proven two ways: central finite differences of the same network evaluated
-//! in f64, and PyTorch's numbers for a fixed network. Plus a tiny end-to-end fit as a regression guard.
+//! The MLP's gradients, plain and layer-normed (`Mlp::with_layer_norm`), proven two ways: central
+//! finite differences of the same network evaluated in f64, and PyTorch's numbers for a fixed
+//! network (the normed one's in `rl_layer_norm.rs`). Plus a tiny end-to-end fit as a regression
+//! guard.
 
 // Inside `mod rl` so that `cargo test rl` selects these tests with the unit tests of `dualrep_core::rl`.
 mod rl {
@@ -8,23 +10,30 @@ mod rl {
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
+    use crate::support::gradient_check::{
+        analytic, assert_close, assert_frozen_pass_is_the_same, central_differences, check,
+        fill_problem, forward_backward, mse_f64,
+    };
+
     // ----------------------------------------------------------------------------------------
     // Finite differences
     // ----------------------------------------------------------------------------------------
 
     /// Network shapes to check: sizes on both sides of 5 (nalgebra's own gemm changes code path
     /// there; ours must not care), and a critic-like scalar output.
-    const SHAPES: [(usize, &[usize], usize, usize); 3] = [
+    const SHAPES: [Shape; 3] = [
         (7, &[9, 8], 6, 10),
         (3, &[5, 4], 2, 4),
         (10, &[32, 24], 1, 16),
     ];
 
-    /// Half-width of the central differences, on the f64 evaluation below: small enough to
-    /// cross a ReLU kink only by bad luck, large enough for f64 rounding (1e-16 of the loss,
-    /// divided by the step) to stay near 1e-10. Between kinks the loss is quadratic along any one
-    /// coordinate, so central differences carry no truncation error.
-    const STEP: f64 = 1e-6;
+    // Central differences (`support::gradient_check::STEP`) of the f64 evaluation: between ReLU
+    // kinks the plain network's loss is quadratic along any one coordinate, so they carry no
+    // truncation error; a layer norm makes it not quadratic, and its truncation error, of order
+    // STEP^2 times the third derivative, stays far below f32's rounding.
+
+    /// Both kinds of network, each with the relative error its central differences allow.
+    const KINDS: [(bool, f64); 2] = [(false, 2e-4), (true, 5e-4)];
 
     struct Problem {
         mlp: Mlp,
@@ -34,112 +43,52 @@ mod rl {
 
     impl Problem {
         fn new(n_in: usize, hidden: &[usize], n_out: usize, batch: usize, seed: u64) -> Self {
-            let mlp = Mlp::new(n_in, hidden, n_out, &mut ChaCha8Rng::seed_from_u64(seed));
-            let mut ws = mlp.workspace(batch);
-            for (k, x) in ws.input_mut().iter_mut().enumerate() {
-                *x = (0.7 * k as f32 + seed as f32).sin() * 2.0;
+            Self::of_kind(n_in, hidden, n_out, batch, seed, false)
+        }
+
+        /// With `layer_norm`, the network normed, its gains and biases moved away from 1 and 0
+        /// so that their gradients and every path through them are exercised.
+        fn of_kind(
+            n_in: usize,
+            hidden: &[usize],
+            n_out: usize,
+            batch: usize,
+            seed: u64,
+            layer_norm: bool,
+        ) -> Self {
+            let mut mlp = Mlp::new(n_in, hidden, n_out, &mut ChaCha8Rng::seed_from_u64(seed));
+            if layer_norm {
+                mlp = mlp.with_layer_norm();
+                let first_norm = mlp.layers().iter().map(|l| l.len()).sum::<usize>();
+                for (k, p) in mlp.params_mut()[first_norm..].iter_mut().enumerate() {
+                    *p += 0.3 * (0.9 * k as f32 + seed as f32).sin();
+                }
             }
-            let target = (0..n_out * batch).map(|k| (0.3 * k as f32).cos()).collect();
+            let mut ws = mlp.workspace(batch);
+            let target = fill_problem(&mut ws, n_out, seed);
             Self { mlp, ws, target }
         }
 
         /// Forward, MSE, backward with the input gradient; returns (dL/dparams, dL/dinput).
         fn analytic(&mut self) -> (Vec<f32>, Vec<f32>) {
-            self.mlp.zero_grad();
-            self.mlp.forward(&mut self.ws);
-            let (out, grad) = self.ws.output_and_grad_mut();
-            mse_loss(out.as_slice(), &self.target, grad.as_mut_slice());
-            self.mlp.backward_with_input_grad(&mut self.ws);
-            (
-                self.mlp.grads().to_vec(),
-                self.ws.input_grad().as_slice().to_vec(),
-            )
+            analytic(&mut self.mlp, &mut self.ws, &self.target)
         }
 
-        /// The same loss in f64 with plain loops over PyTorch's row-major weights: a second,
-        /// independent forward pass, precise enough that its central differences measure only
-        /// the f32 rounding of the analytic gradient. `input` is column-major `n_in x batch`.
+        /// The same loss in f64 ([`mse_f64`]) at other parameters and input.
         fn loss_f64(&self, params: &[f64], input: &[f64]) -> f64 {
-            let layers = self.mlp.layers();
-            let n_in = layers[0].n_in;
-            let mut sum = 0.0;
-            for (sample, target) in input
-                .chunks_exact(n_in)
-                .zip(self.target.chunks_exact(self.mlp.n_out()))
-            {
-                let mut x = sample.to_vec();
-                for (l, layer) in layers.iter().enumerate() {
-                    let (w, b) = (layer.offset, layer.offset + layer.n_out * layer.n_in);
-                    x = (0..layer.n_out)
-                        .map(|o| {
-                            let row = &params[w + o * layer.n_in..w + (o + 1) * layer.n_in];
-                            let z =
-                                params[b + o] + row.iter().zip(&x).map(|(w, x)| w * x).sum::<f64>();
-                            if l + 1 < layers.len() { z.max(0.0) } else { z }
-                        })
-                        .collect();
-                }
-                sum += x
-                    .iter()
-                    .zip(target)
-                    .map(|(o, &y)| (o - f64::from(y)).powi(2))
-                    .sum::<f64>();
-            }
-            sum / self.target.len() as f64
+            mse_f64(&self.mlp, &self.target, params, input)
         }
 
         /// Central differences of [`Problem::loss_f64`]: (dL/dparams, dL/dinput).
         fn numeric(&self) -> (Vec<f64>, Vec<f64>) {
-            let params = self.mlp.params().iter().map(|&p| f64::from(p)).collect();
-            let input = self.ws.input().iter().map(|&x| f64::from(x)).collect();
-            let mut point: [Vec<f64>; 2] = [params, input];
-            let mut derivative = [Vec::new(), Vec::new()];
-            for which in 0..2 {
-                for i in 0..point[which].len() {
-                    let original = point[which][i];
-                    point[which][i] = original + STEP;
-                    let plus = self.loss_f64(&point[0], &point[1]);
-                    point[which][i] = original - STEP;
-                    let minus = self.loss_f64(&point[0], &point[1]);
-                    point[which][i] = original;
-                    derivative[which].push((plus - minus) / (2.0 * STEP));
-                }
-            }
-            let [d_params, d_input] = derivative;
-            (d_params, d_input)
+            central_differences(&self.mlp, &self.ws, |p, x| self.loss_f64(p, x))
         }
-    }
-
-    /// Largest |analytic - numeric| / max(|analytic|, |numeric|, 1e-4) over all coordinates;
-    /// panics past `tolerance`. The floor keeps gradients within f32 rounding of zero from
-    /// counting as large relative errors.
-    fn check(name: &str, analytic: &[f32], numeric: &[f64], tolerance: f64) -> f64 {
-        assert_eq!(analytic.len(), numeric.len());
-        let mut worst = 0.0f64;
-        for (i, (&a, &n)) in analytic.iter().zip(numeric).enumerate() {
-            let a = f64::from(a);
-            let err = (a - n).abs() / a.abs().max(n.abs()).max(1e-4);
-            assert!(
-                err <= tolerance,
-                "{name}[{i}]: analytic {a:e}, central difference {n:e}"
-            );
-            worst = worst.max(err);
-        }
-        assert!(
-            numeric.iter().any(|&n| n.abs() > 1e-3),
-            "{name}: all gradients near zero"
-        );
-        eprintln!(
-            "{name}: {} coordinates, max relative error {worst:.2e}",
-            analytic.len()
-        );
-        worst
     }
 
     #[test]
     fn f32_forward_matches_the_f64_evaluation() {
-        for (seed, &(n_in, hidden, n_out, batch)) in SHAPES.iter().enumerate() {
-            let mut problem = Problem::new(n_in, hidden, n_out, batch, seed as u64);
+        for ((seed, &(n_in, hidden, n_out, batch)), (norm, _)) in cases() {
+            let mut problem = Problem::of_kind(n_in, hidden, n_out, batch, seed as u64, norm);
             let (_, _) = problem.analytic();
             let out = problem.ws.output().as_slice();
             let loss: f64 = out
@@ -158,28 +107,33 @@ mod rl {
         }
     }
 
-    #[test]
-    fn weight_and_bias_gradients_match_central_differences() {
-        kernels::on_every_path(|path| {
-            for (seed, &(n_in, hidden, n_out, batch)) in SHAPES.iter().enumerate() {
-                let mut problem = Problem::new(n_in, hidden, n_out, batch, seed as u64);
-                let (grads, _) = problem.analytic();
-                let (numeric, _) = problem.numeric();
-                let name = format!("{path}: dL/dparams {n_in}->{hidden:?}->{n_out} x{batch}");
-                check(&name, &grads, &numeric, 2e-4);
-            }
-        });
+    /// `(n_in, hidden, n_out, batch)`.
+    type Shape = (usize, &'static [usize], usize, usize);
+
+    /// Every shape (numbered, the number its seed) of each kind.
+    fn cases() -> impl Iterator<Item = ((usize, &'static Shape), (bool, f64))> {
+        KINDS
+            .into_iter()
+            .flat_map(|kind| SHAPES.iter().enumerate().map(move |shape| (shape, kind)))
     }
 
+    /// Weights, biases (and a layer norm's gains and biases) and the input, on every path.
     #[test]
-    fn input_gradient_matches_central_differences() {
+    fn parameter_and_input_gradients_match_central_differences() {
         kernels::on_every_path(|path| {
-            for (seed, &(n_in, hidden, n_out, batch)) in SHAPES.iter().enumerate() {
-                let mut problem = Problem::new(n_in, hidden, n_out, batch, seed as u64);
-                let (_, input_grad) = problem.analytic();
-                let (_, numeric) = problem.numeric();
-                let name = format!("{path}: dL/dinput {n_in}->{hidden:?}->{n_out} x{batch}");
-                check(&name, &input_grad, &numeric, 2e-4);
+            for ((seed, &(n_in, hidden, n_out, batch)), (norm, tolerance)) in cases() {
+                let mut problem = Problem::of_kind(n_in, hidden, n_out, batch, seed as u64, norm);
+                let (grads, input_grad) = problem.analytic();
+                let (numeric, numeric_input) = problem.numeric();
+                let shape = format!("{n_in}->{hidden:?}->{n_out} x{batch}, layer norm {norm}");
+                check(
+                    &format!("{path}: dL/dparams {shape}"),
+                    &grads,
+                    &numeric,
+                    tolerance,
+                );
+                let name = format!("{path}: dL/dinput {shape}");
+                check(&name, &input_grad, &numeric_input, tolerance);
             }
         });
     }
@@ -187,18 +141,11 @@ mod rl {
     #[test]
     fn backward_input_gives_the_same_input_gradient_and_leaves_parameters_alone() {
         kernels::on_every_path(|path| {
-            let mut problem = Problem::new(10, &[32, 24], 1, 16, 3);
-            let (_, input_grad) = problem.analytic();
-            problem.mlp.zero_grad();
-            // Same input, and the same output gradient as `analytic` left in the workspace.
-            problem.mlp.forward(&mut problem.ws);
-            problem.mlp.backward_input(&mut problem.ws);
-            assert_eq!(
-                problem.ws.input_grad().as_slice(),
-                &input_grad[..],
-                "{path}"
-            );
-            assert!(problem.mlp.grads().iter().all(|&g| g == 0.0), "{path}");
+            for (norm, _) in KINDS {
+                let mut p = Problem::of_kind(10, &[32, 24], 1, 16, 3, norm);
+                let what = format!("{path}, layer norm {norm}");
+                assert_frozen_pass_is_the_same(&mut p.mlp, &mut p.ws, &p.target, &what);
+            }
         });
     }
 
@@ -254,28 +201,6 @@ mod rl {
         }
         let target = (0..54).map(|k| (0.3 * k as f64).sin() as f32).collect();
         (mlp, ws, target)
-    }
-
-    /// zero_grad, forward, MSE, backward (with the input gradient); returns the loss.
-    fn forward_backward(mlp: &mut Mlp, ws: &mut MlpWorkspace, target: &[f32]) -> f32 {
-        mlp.zero_grad();
-        mlp.forward(ws);
-        let (out, grad) = ws.output_and_grad_mut();
-        let loss = mse_loss(out.as_slice(), target, grad.as_mut_slice());
-        mlp.backward_with_input_grad(ws);
-        loss
-    }
-
-    fn assert_close(name: &str, got: &[f32], want: &[f32], tolerance: f32) -> f32 {
-        assert_eq!(got.len(), want.len());
-        let mut worst = 0.0f32;
-        for (i, (&g, &w)) in got.iter().zip(want).enumerate() {
-            let err = (g - w).abs() / w.abs().max(1e-2);
-            assert!(err <= tolerance, "{name}[{i}]: {g:e}, PyTorch {w:e}");
-            worst = worst.max(err);
-        }
-        eprintln!("{name}: max deviation from PyTorch {worst:.2e} (relative, absolute below 1e-2)");
-        worst
     }
 
     fn sums(values: &[f32]) -> [f32; 2] {

@@ -1,232 +1,16 @@
-//! The layer-normed MLP (`Mlp::with_layer_norm`, the env critic of `critic_layer_norm`), proven
-//! as the plain one is in `rl_gradients.rs`: central finite differences of an f64 evaluation on
-//! every kernel path, and PyTorch's numbers for a fixed network (`Linear -> LayerNorm -> ReLU`).
+//! The layer-normed MLP (`Mlp::with_layer_norm`, the env critic of `critic_layer_norm`) against
+//! PyTorch's numbers for a fixed network (`Linear -> LayerNorm -> ReLU`), and its tensors named
+//! and initialised as PyTorch's. Its central differences are `rl_gradients.rs`'s, run on both
+//! kinds of network.
 
 // Inside `mod rl` so that `cargo test rl` selects these tests with the unit tests of `dualrep_core::rl`.
 mod rl {
     use dualrep_core::rl::kernels;
-    use dualrep_core::rl::{Adam, AdamConfig, Mlp, MlpWorkspace, mse_loss};
+    use dualrep_core::rl::{Adam, AdamConfig, Mlp, MlpWorkspace};
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
-    /// Sizes on both sides of 5 and a critic-like scalar output, as `rl_gradients.rs` checks.
-    const SHAPES: [(usize, &[usize], usize, usize); 3] = [
-        (7, &[9, 8], 6, 10),
-        (3, &[5, 4], 2, 4),
-        (10, &[32, 24], 1, 16),
-    ];
-
-    /// Central differences' half-width on the f64 evaluation. The normalisation makes the loss
-    /// no longer quadratic along a coordinate, so they carry a truncation error of order
-    /// STEP^2 times the third derivative, far below f32's rounding at this step.
-    const STEP: f64 = 1e-6;
-    const EPS: f64 = 1e-5;
-
-    struct Problem {
-        mlp: Mlp,
-        ws: MlpWorkspace,
-        target: Vec<f32>,
-    }
-
-    impl Problem {
-        fn new(n_in: usize, hidden: &[usize], n_out: usize, batch: usize, seed: u64) -> Self {
-            let mut rng = ChaCha8Rng::seed_from_u64(seed);
-            let mut mlp = Mlp::new(n_in, hidden, n_out, &mut rng).with_layer_norm();
-            // Gains and biases away from their initial 1 and 0, so that their gradients and the
-            // paths through them are all exercised.
-            let first_norm = mlp.layers().iter().map(|l| l.len()).sum::<usize>();
-            for (k, p) in mlp.params_mut()[first_norm..].iter_mut().enumerate() {
-                *p += 0.3 * (0.9 * k as f32 + seed as f32).sin();
-            }
-            let mut ws = mlp.workspace(batch);
-            for (k, x) in ws.input_mut().iter_mut().enumerate() {
-                *x = (0.7 * k as f32 + seed as f32).sin() * 2.0;
-            }
-            let target = (0..n_out * batch).map(|k| (0.3 * k as f32).cos()).collect();
-            Self { mlp, ws, target }
-        }
-
-        /// Forward, MSE, backward with the input gradient; returns (dL/dparams, dL/dinput).
-        fn analytic(&mut self) -> (Vec<f32>, Vec<f32>) {
-            self.mlp.zero_grad();
-            self.mlp.forward(&mut self.ws);
-            let (out, grad) = self.ws.output_and_grad_mut();
-            mse_loss(out.as_slice(), &self.target, grad.as_mut_slice());
-            self.mlp.backward_with_input_grad(&mut self.ws);
-            (
-                self.mlp.grads().to_vec(),
-                self.ws.input_grad().as_slice().to_vec(),
-            )
-        }
-
-        /// The same loss in f64 with plain loops: every layer's weight and bias in order, then
-        /// every norm's gain and bias; the variance biased, as PyTorch's.
-        fn loss_f64(&self, params: &[f64], input: &[f64]) -> f64 {
-            let layers = self.mlp.layers();
-            let n_in = layers[0].n_in;
-            let mut norm_offset = layers.iter().map(|l| l.len()).sum::<usize>();
-            let norm_offsets: Vec<usize> = layers[..layers.len() - 1]
-                .iter()
-                .map(|l| {
-                    let at = norm_offset;
-                    norm_offset += 2 * l.n_out;
-                    at
-                })
-                .collect();
-            let mut sum = 0.0;
-            for (sample, target) in input
-                .chunks_exact(n_in)
-                .zip(self.target.chunks_exact(self.mlp.n_out()))
-            {
-                let mut x = sample.to_vec();
-                for (l, layer) in layers.iter().enumerate() {
-                    let (w, b) = (layer.offset, layer.offset + layer.n_out * layer.n_in);
-                    let z: Vec<f64> = (0..layer.n_out)
-                        .map(|o| {
-                            let row = &params[w + o * layer.n_in..w + (o + 1) * layer.n_in];
-                            params[b + o] + row.iter().zip(&x).map(|(w, x)| w * x).sum::<f64>()
-                        })
-                        .collect();
-                    x = match norm_offsets.get(l) {
-                        None => z,
-                        Some(&at) => {
-                            let n = z.len() as f64;
-                            let mean = z.iter().sum::<f64>() / n;
-                            let var = z.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n;
-                            let inv = 1.0 / (var + EPS).sqrt();
-                            let (gain, bias) = (&params[at..], &params[at + z.len()..]);
-                            z.iter()
-                                .enumerate()
-                                .map(|(j, v)| (gain[j] * (v - mean) * inv + bias[j]).max(0.0))
-                                .collect()
-                        }
-                    };
-                }
-                sum += x
-                    .iter()
-                    .zip(target)
-                    .map(|(o, &y)| (o - f64::from(y)).powi(2))
-                    .sum::<f64>();
-            }
-            sum / self.target.len() as f64
-        }
-
-        /// Central differences of [`Problem::loss_f64`]: (dL/dparams, dL/dinput).
-        fn numeric(&self) -> (Vec<f64>, Vec<f64>) {
-            let params = self.mlp.params().iter().map(|&p| f64::from(p)).collect();
-            let input = self.ws.input().iter().map(|&x| f64::from(x)).collect();
-            let mut point: [Vec<f64>; 2] = [params, input];
-            let mut derivative = [Vec::new(), Vec::new()];
-            for which in 0..2 {
-                for i in 0..point[which].len() {
-                    let original = point[which][i];
-                    point[which][i] = original + STEP;
-                    let plus = self.loss_f64(&point[0], &point[1]);
-                    point[which][i] = original - STEP;
-                    let minus = self.loss_f64(&point[0], &point[1]);
-                    point[which][i] = original;
-                    derivative[which].push((plus - minus) / (2.0 * STEP));
-                }
-            }
-            let [d_params, d_input] = derivative;
-            (d_params, d_input)
-        }
-    }
-
-    /// Largest |analytic - numeric| / max(|analytic|, |numeric|, 1e-4); panics past `tolerance`.
-    fn check(name: &str, analytic: &[f32], numeric: &[f64], tolerance: f64) {
-        assert_eq!(analytic.len(), numeric.len());
-        let mut worst = 0.0f64;
-        for (i, (&a, &n)) in analytic.iter().zip(numeric).enumerate() {
-            let a = f64::from(a);
-            let err = (a - n).abs() / a.abs().max(n.abs()).max(1e-4);
-            assert!(
-                err <= tolerance,
-                "{name}[{i}]: analytic {a:e}, central difference {n:e}"
-            );
-            worst = worst.max(err);
-        }
-        assert!(
-            numeric.iter().any(|&n| n.abs() > 1e-3),
-            "{name}: all gradients near zero"
-        );
-        eprintln!(
-            "{name}: {} coordinates, max relative error {worst:.2e}",
-            analytic.len()
-        );
-    }
-
-    #[test]
-    fn gains_biases_and_weights_match_central_differences_on_every_path() {
-        kernels::on_every_path(|path| {
-            for (seed, &(n_in, hidden, n_out, batch)) in SHAPES.iter().enumerate() {
-                let mut problem = Problem::new(n_in, hidden, n_out, batch, seed as u64);
-                let (grads, input_grad) = problem.analytic();
-                let (numeric, numeric_input) = problem.numeric();
-                let shape = format!("{n_in}->{hidden:?}->{n_out} x{batch}");
-                check(
-                    &format!("{path}: dL/dparams {shape}"),
-                    &grads,
-                    &numeric,
-                    5e-4,
-                );
-                check(
-                    &format!("{path}: dL/dinput {shape}"),
-                    &input_grad,
-                    &numeric_input,
-                    5e-4,
-                );
-            }
-        });
-    }
-
-    #[test]
-    fn a_frozen_normed_critic_passes_back_the_same_input_gradient_and_keeps_its_own() {
-        kernels::on_every_path(|path| {
-            let mut problem = Problem::new(10, &[32, 24], 1, 16, 3);
-            let (_, input_grad) = problem.analytic();
-            problem.mlp.zero_grad();
-            problem.mlp.forward(&mut problem.ws);
-            problem.mlp.backward_input(&mut problem.ws);
-            assert_eq!(
-                problem.ws.input_grad().as_slice(),
-                &input_grad[..],
-                "{path}"
-            );
-            assert!(problem.mlp.grads().iter().all(|&g| g == 0.0), "{path}");
-        });
-    }
-
-    #[test]
-    fn an_input_gradient_on_some_columns_has_the_bits_of_the_whole_batch_pass() {
-        kernels::on_every_path(|path| {
-            let mut problem = Problem::new(10, &[40, 30], 1, 37, 5);
-            problem.mlp.forward(&mut problem.ws);
-            let picked: Vec<usize> = (1..37).filter(|i| i % 3 != 0).collect();
-            for (i, g) in problem.ws.output_grad_mut().iter_mut().enumerate() {
-                *g = if picked.contains(&i) {
-                    (i as f32 * 0.37).cos()
-                } else {
-                    0.0
-                };
-            }
-            let mut sub = problem.mlp.workspace(37);
-            problem
-                .mlp
-                .backward_input_columns(&problem.ws, &picked, &mut sub);
-            problem.mlp.backward_input(&mut problem.ws);
-            for (c, &i) in picked.iter().enumerate() {
-                let bits = |ws: &MlpWorkspace, c: usize| -> Vec<u32> {
-                    ws.input_grad()
-                        .column(c)
-                        .iter()
-                        .map(|v| v.to_bits())
-                        .collect()
-                };
-                assert_eq!(bits(&sub, c), bits(&problem.ws, i), "{path}: sample {i}");
-            }
-        });
-    }
+    use crate::support::gradient_check::{assert_close, forward_backward};
 
     #[test]
     fn layer_norms_draw_nothing_and_name_their_tensors_as_pytorch_does() {
@@ -249,8 +33,8 @@ mod rl {
         assert_eq!(&normed.params()[plain.params().len() + 5..][..5], &[0.0; 5]);
     }
 
-    // Printed by `python3 benches/reference/torch_layer_norm_values.py` with torch 2.15.0+cu132
-    // (the PyPI wheel, run on the CPU): the MLP 6 -> [8, 7] -> 6 with a layer norm before each
+    // Printed by `python3 benches/reference/torch_reference_values.py --layer-norm` with torch
+    // 2.15.0+cu132 (the PyPI wheel, run on the CPU): the MLP 6 -> [8, 7] -> 6 with a layer norm before each
     // hidden ReLU and the formula parameters below, batch 9, MSE loss, and two steps of
     // torch.optim.Adam(lr = 0.01), each a zero_grad, forward, backward and step.
     const LOSS_0: f32 = 0.80314636;
@@ -282,26 +66,6 @@ mod rl {
         }
         let target = (0..54).map(|k| (0.3 * k as f64).sin() as f32).collect();
         (mlp, ws, target)
-    }
-
-    fn forward_backward(mlp: &mut Mlp, ws: &mut MlpWorkspace, target: &[f32]) -> f32 {
-        mlp.zero_grad();
-        mlp.forward(ws);
-        let (out, grad) = ws.output_and_grad_mut();
-        let loss = mse_loss(out.as_slice(), target, grad.as_mut_slice());
-        mlp.backward_with_input_grad(ws);
-        loss
-    }
-
-    fn assert_close(name: &str, got: &[f32], want: &[f32], tolerance: f32) {
-        assert_eq!(got.len(), want.len());
-        let mut worst = 0.0f32;
-        for (i, (&g, &w)) in got.iter().zip(want).enumerate() {
-            let err = (g - w).abs() / w.abs().max(1e-2);
-            assert!(err <= tolerance, "{name}[{i}]: {g:e}, PyTorch {w:e}");
-            worst = worst.max(err);
-        }
-        eprintln!("{name}: max deviation from PyTorch {worst:.2e} (relative, absolute below 1e-2)");
     }
 
     #[test]

@@ -437,9 +437,18 @@ mod tests {
     #[test]
     fn an_input_gradient_on_some_columns_has_the_bits_of_the_whole_batch_pass() {
         kernels::on_every_path(|path| {
-            for (n_in, hidden, batch) in [(10, [40, 30], 37), (10, [400, 300], 64), (3, [5, 4], 3)]
-            {
+            let shapes = [(10, [40, 30], 37), (10, [400, 300], 64), (3, [5, 4], 3)];
+            let cases = [false, true]
+                .into_iter()
+                .flat_map(|layer_norm| shapes.map(|shape| (shape, layer_norm)));
+            for ((n_in, hidden, batch), layer_norm) in cases {
                 let mlp = Mlp::new(n_in, &hidden, 1, &mut ChaCha8Rng::seed_from_u64(5));
+                // Through the layer norms too, which keep what they need per column.
+                let mlp = if layer_norm {
+                    mlp.with_layer_norm()
+                } else {
+                    mlp
+                };
                 let mut whole = mlp.workspace(batch);
                 for (k, v) in whole.input_mut().iter_mut().enumerate() {
                     *v = (k as f32 * 0.61).sin();
@@ -473,7 +482,7 @@ mod tests {
                         assert_eq!(
                             bits(&sub, c),
                             bits(&whole, i),
-                            "{path}: {hidden:?} batch {batch}, sample {i}"
+                            "{path}: {hidden:?} batch {batch}, layer norm {layer_norm}, sample {i}"
                         );
                     }
                 }

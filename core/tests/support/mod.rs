@@ -2,3 +2,4 @@
 
 pub mod counting_alloc;
 pub mod episodes;
+pub mod gradient_check;
