@@ -111,12 +111,19 @@ fn assert_same_checkpoint(a: &[u8], b: &[u8]) {
     }
 }
 
-#[test]
-fn resuming_from_a_checkpoint_is_bit_identical_to_never_stopping() {
-    let replay = random_replay(5, 2, 300, 1);
+/// A small learner with a human critic, its env critics layer-normed if `critic_layer_norm`.
+fn resumable_config(critic_layer_norm: bool) -> SacConfig {
     let mut config = small_config(true);
     config.hidden = vec![16, 8];
     config.batch_size = 32;
+    config.critic_layer_norm = critic_layer_norm;
+    config
+}
+
+/// Five updates, a checkpoint, seven more from it and straight on: the same bytes. Returns the
+/// learner that never stopped, and the checkpoint.
+fn resume_is_bit_identical(config: SacConfig) -> (Sac, Vec<u8>) {
+    let replay = random_replay(5, 2, 300, 1);
     let mut straight = Sac::new(5, 2, config.clone(), 7);
     let mut resumed = Sac::new(5, 2, config, 7);
     let mut action = [0.0f32; 2];
@@ -141,6 +148,12 @@ fn resuming_from_a_checkpoint_is_bit_identical_to_never_stopping() {
     straight.act(&[0.3; 5], false, &mut a);
     resumed.act(&[0.3; 5], false, &mut b);
     assert_eq!(a, b, "same RNG state after loading");
+    (straight, bytes)
+}
+
+#[test]
+fn resuming_from_a_checkpoint_is_bit_identical_to_never_stopping() {
+    resume_is_bit_identical(resumable_config(false));
     // And the checkpoint is not trivially the same as a fresh learner.
     assert_ne!(
         Sac::new(5, 2, small_config(true), 7).to_safetensors().len(),
@@ -153,18 +166,7 @@ fn resuming_from_a_checkpoint_is_bit_identical_to_never_stopping() {
 /// goes on bit for bit.
 #[test]
 fn a_learner_with_layer_normed_critics_resumes_bit_identically() {
-    let replay = random_replay(5, 2, 300, 1);
-    let mut config = small_config(true);
-    config.hidden = vec![16, 8];
-    config.batch_size = 32;
-    config.critic_layer_norm = true;
-    let mut straight = Sac::new(5, 2, config.clone(), 7);
-    let mut resumed = Sac::new(5, 2, config.clone(), 7);
-    for _ in 0..5 {
-        straight.update(&replay).unwrap();
-        resumed.update(&replay).unwrap();
-    }
-    let bytes = resumed.to_safetensors();
+    let (mut normed, bytes) = resume_is_bit_identical(resumable_config(true));
     let names: Vec<String> = safetensors::SafeTensors::deserialize(&bytes)
         .unwrap()
         .names()
@@ -188,21 +190,12 @@ fn a_learner_with_layer_normed_critics_resumes_bit_identically() {
             "{net} has no layer norm: {names:?}"
         );
     }
-    let mut resumed = Sac::from_safetensors(&bytes).expect("reads its own checkpoint");
+    let resumed = Sac::from_safetensors(&bytes).expect("reads its own checkpoint");
     assert!(resumed.config().critic_layer_norm);
-    for _ in 0..7 {
-        straight.update(&replay).unwrap();
-        resumed.update(&replay).unwrap();
-    }
-    assert_same_checkpoint(&straight.to_safetensors(), &resumed.to_safetensors());
     // Another learner than the plain one from the same seed.
-    config.critic_layer_norm = false;
-    let mut plain = Sac::new(5, 2, config, 7);
-    for _ in 0..12 {
-        plain.update(&replay).unwrap();
-    }
+    let (mut plain, _) = resume_is_bit_identical(resumable_config(false));
     let (mut a, mut b) = ([0.0f32; 2], [0.0f32; 2]);
-    straight.act(&[0.3; 5], true, &mut a);
+    normed.act(&[0.3; 5], true, &mut a);
     plain.act(&[0.3; 5], true, &mut b);
     assert_ne!(a, b, "the norms change what the actor learns");
 }

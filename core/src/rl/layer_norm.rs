@@ -28,16 +28,6 @@ pub struct LayerNorm {
 }
 
 impl LayerNorm {
-    /// Number of parameters: gain and bias.
-    pub fn len(&self) -> usize {
-        2 * self.n
-    }
-
-    /// Always false: a layer has at least one feature.
-    pub fn is_empty(&self) -> bool {
-        self.n == 0
-    }
-
     pub fn gain_range(&self) -> Range<usize> {
         self.offset..self.offset + self.n
     }

@@ -127,9 +127,14 @@ impl MlpWorkspace {
     }
 
     /// Copy what an input-gradient pass reads, the hidden ReLU outputs, what their layer norms
-    /// kept (if `from` has them), and dL/d output, of the samples `columns` of `from` into this
-    /// workspace's first `columns.len()` columns.
-    pub(super) fn gather_for_input_grad(&mut self, from: &MlpWorkspace, columns: &[usize]) {
+    /// kept (for a network with them, `layer_norm`), and dL/d output, of the samples `columns`
+    /// of `from` into this workspace's first `columns.len()` columns.
+    pub(super) fn gather_for_input_grad(
+        &mut self,
+        from: &MlpWorkspace,
+        columns: &[usize],
+        layer_norm: bool,
+    ) {
         assert_eq!(self.sizes, from.sizes, "workspaces of different shapes");
         assert!(
             columns.len() <= self.batch,
@@ -144,10 +149,12 @@ impl MlpWorkspace {
             let n = to.nrows();
             gather_columns(to.as_mut_slice(), from.as_slice(), n, columns);
         }
-        if !from.norms.is_empty() {
+        // A workspace with norms may serve a network without them (SAC's twins share one):
+        // what a plain network never wrote is not copied.
+        if layer_norm {
             assert!(
-                !self.norms.is_empty(),
-                "gathering layer norms into a workspace without them"
+                !self.norms.is_empty() && !from.norms.is_empty(),
+                "gathering layer norms from or into a workspace without them"
             );
             for ((to, from), &n) in self.norms.iter_mut().zip(&from.norms).zip(&self.sizes[1..]) {
                 gather_columns(&mut to.normalized, &from.normalized, n, columns);
