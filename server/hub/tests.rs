@@ -124,6 +124,16 @@ fn content() -> QueryContent {
 }
 
 impl Harness {
+    /// The session thread says it has started, with nothing replayed.
+    fn start(&self) {
+        self.events
+            .send(SessionEvent::Started {
+                replayed: 0,
+                graph: crate::scene_graph::SceneGraph::Reaching,
+            })
+            .unwrap();
+    }
+
     /// Ask query `seq` and return its id on the wire once the owner has stored and opened it
     /// (the session's query number: `seq` itself).
     async fn ask(&self, seq: u64) -> u64 {
@@ -180,12 +190,7 @@ impl Harness {
 #[tokio::test(start_paused = true)]
 async fn a_query_counts_as_no_feedback_exactly_at_its_timeout() {
     let h = harness().await;
-    h.events
-        .send(SessionEvent::Started {
-            replayed: 0,
-            graph: crate::scene_graph::SceneGraph::Reaching,
-        })
-        .unwrap();
+    h.start();
     let id = h.ask(0).await;
     tokio::time::advance(TIMEOUT - Duration::from_millis(1)).await;
     h.settle().await;
@@ -217,12 +222,7 @@ async fn a_query_counts_as_no_feedback_exactly_at_its_timeout() {
 #[tokio::test(start_paused = true)]
 async fn an_answer_before_the_timeout_wins_and_no_timeout_follows() {
     let h = harness().await;
-    h.events
-        .send(SessionEvent::Started {
-            replayed: 0,
-            graph: crate::scene_graph::SceneGraph::Reaching,
-        })
-        .unwrap();
+    h.start();
     let id = h.ask(0).await;
     tokio::time::advance(TIMEOUT / 2).await;
     assert_eq!(
@@ -249,12 +249,7 @@ async fn an_answer_before_the_timeout_wins_and_no_timeout_follows() {
 #[tokio::test(start_paused = true)]
 async fn an_answer_can_be_undone_within_the_window_and_not_after() {
     let h = harness().await;
-    h.events
-        .send(SessionEvent::Started {
-            replayed: 0,
-            graph: crate::scene_graph::SceneGraph::Reaching,
-        })
-        .unwrap();
+    h.start();
     // Within the window: undone, the session told, and the query open again with a new
     // deadline.
     let first = h.ask(0).await;
@@ -294,12 +289,7 @@ async fn an_answer_can_be_undone_within_the_window_and_not_after() {
 #[tokio::test(start_paused = true)]
 async fn the_end_is_stored_and_published_and_open_queries_close() {
     let h = harness().await;
-    h.events
-        .send(SessionEvent::Started {
-            replayed: 0,
-            graph: crate::scene_graph::SceneGraph::Reaching,
-        })
-        .unwrap();
+    h.start();
     let id = h.ask(0).await;
     h.events
         .send(SessionEvent::Ended(crate::session::Ending::Stopped))
@@ -332,12 +322,7 @@ async fn a_named_answer_stores_who_and_only_its_trainer_may_undo_it() {
         trainer(&h.store, "ada").await,
         trainer(&h.store, "bo").await,
     );
-    h.events
-        .send(SessionEvent::Started {
-            replayed: 0,
-            graph: crate::scene_graph::SceneGraph::Reaching,
-        })
-        .unwrap();
+    h.start();
     let id = h.ask(0).await;
     h.handle.answer(id, AnswerValue::Evaluation(1), &ada).await;
     h.control().await;
@@ -362,12 +347,7 @@ async fn k_named_trainers_answer_each_query_and_their_answers_combine() {
         trainer(&h.store, "ada").await,
         trainer(&h.store, "bo").await,
     );
-    h.events
-        .send(SessionEvent::Started {
-            replayed: 0,
-            graph: crate::scene_graph::SceneGraph::Reaching,
-        })
-        .unwrap();
+    h.start();
     let id = h.ask(0).await;
     // Without a name there is no answer to count.
     assert!(matches!(
