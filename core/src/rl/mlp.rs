@@ -256,21 +256,14 @@ impl Mlp {
     /// [`Mlp::forward`]): accumulates dL/d parameters into [`Mlp::grads`]. Does not compute the
     /// input gradient (that saves the first layer's third product).
     pub fn backward(&mut self, ws: &mut MlpWorkspace) {
-        let (layers, norms) = (&self.layers, &self.norms);
-        backward(
-            layers,
-            norms,
-            &self.params,
-            Some(&mut self.grads),
-            ws,
-            false,
-        );
+        let grads = Some(&mut self.grads[..]);
+        backward(&self.layers, &self.norms, &self.params, grads, ws, false);
     }
 
     /// [`Mlp::backward`] plus dL/d input into `ws.input_grad()`.
     pub fn backward_with_input_grad(&mut self, ws: &mut MlpWorkspace) {
-        let (layers, norms) = (&self.layers, &self.norms);
-        backward(layers, norms, &self.params, Some(&mut self.grads), ws, true);
+        let grads = Some(&mut self.grads[..]);
+        backward(&self.layers, &self.norms, &self.params, grads, ws, true);
     }
 
     /// dL/d input into `ws.input_grad()` only, the parameter gradients untouched: a frozen
