@@ -34,9 +34,9 @@
 //! A paced opening may also taper (`opening_taper`, off by default): its rate falls in a straight
 //! line from `opening_rate` at its first step to nothing after its last, so the answers thin out
 //! instead of stopping at once. On Lunar Lander most of what the product's DREF gives up against
-//! EF-100 it gives up in the 30k steps after its flat 30k-step opening ends (docs/dref.md, "Where
-//! Lunar Lander's gap builds"); a taper over 60k steps spends the same 13,500 answers with no step
-//! at which they stop.
+//! EF-100 it gives up in the 30k steps after its flat 30k-step opening ends
+//! (docs/dref-lunar-lander.md, "Where Lunar Lander's gap builds"); a taper over 60k steps spends
+//! the same 13,500 answers with no step at which they stop.
 //!
 //! [`QueryRule`]: super::query_rule::QueryRule
 //!

@@ -6,9 +6,9 @@
 //! answers out over the abstract states. The learner samples its replay by how often it is in
 //! a state, so on Lunar Lander, where the opening carries the take-off, the states it is in
 //! most had the fewest answers for their visits; a probe that asked at random steps at about the
-//! same rate took off sooner on both seeds it ran (docs/dref.md, "The probe's seed 1"). By
-//! visits, each state is asked `rate` of its own visits: the answers follow the learner as a
-//! random draw would, but a state is never short of its share, and the choice still reads only
+//! same rate took off sooner on both seeds it ran (docs/dref-lunar-lander.md, "The probe's seed
+//! 1"). By visits, each state is asked `rate` of its own visits: the answers follow the learner as
+//! a random draw would, but a state is never short of its share, and the choice still reads only
 //! the scene graph and the answers, DREF's inputs. The spare a repayment leaves after the
 //! opening may be placed the same way (`repayment_placement = "by_visits"`), with visits counted
 //! from the repayment's start.

@@ -2,12 +2,12 @@
 //! its defaults: `eps = 1e-5`, a gain and a bias per feature, initialised to 1 and 0), its
 //! forward pass fused with the ReLU after it, and its backward pass.
 //!
-//! Why a critic gets it: on Lunar Lander the runs that end lowest are those whose env critic
-//! values the policy far above anything it earns (docs/dref.md, "What decides a Lunar Lander
-//! run"). Normalised, each hidden layer's features have norm `sqrt(n)` times the gain, whatever
-//! the input, so a critic cannot extrapolate to ever larger values on inputs unlike its data
-//! unless its last layer's weights grow; this is the critic of Ball et al. 2023 (RLPD) and
-//! Nauman et al. 2024, who report it curbs exactly that overestimation in SAC.
+//! Why a critic gets it: on Lunar Lander the runs that end lowest are those whose env critic values
+//! the policy far above anything it earns (docs/dref-lunar-lander.md, "What decides a Lunar Lander
+//! run"). Normalised, each hidden layer's features have norm `sqrt(n)` times the gain, whatever the
+//! input, so a critic cannot extrapolate to ever larger values on inputs unlike its data unless its
+//! last layer's weights grow; this is the critic of Ball et al. 2023 (RLPD) and Nauman et al. 2024,
+//! who report it curbs exactly that overestimation in SAC.
 //!
 //! Every column (sample) is normalised on its own, over the layer's `n` features, in scalar code
 //! with a fixed order: the same bits on every kernel path for the same pre-activations, and the

@@ -55,9 +55,9 @@ pub enum CriticLoss {
     Mse,
     /// Our choice (the setting `critic_loss = "huber"`), a learner of its own: the Huber loss
     /// at delta 1 (PyTorch's `F.huber_loss`, the loss SB3's DQN fits its Q with). On Lunar
-    /// Lander the runs that end lowest are the ones whose env critic's loss ran away (up to
-    /// 2,000 against 10-100 on the runs that land; docs/dref.md, "What decides a Lunar Lander
-    /// run"), which no query rule reaches; Huber bounds each sample's pull on the critic, so
+    /// Lander the runs that end lowest are the ones whose env critic's loss ran away (up to 2,000
+    /// against 10-100 on the runs that land; docs/dref-lunar-lander.md, "What decides a Lunar
+    /// Lander run"), which no query rule reaches; Huber bounds each sample's pull on the critic, so
     /// a crash's -100 or a target that ran ahead moves it no more than any sample off by 1.
     Huber,
 }
