@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Where a row's gap to its comparator builds: each seed's cumulative reward cut into stretches of
 steps, the comparator's gain in each stretch less the row's, mean +- s.e. over the seeds both
-rows have, and the row's own gain per stretch (docs/dref-lunar-lander.md, "Where Lunar Lander's gap builds").
+rows have, and the row's own gain per stretch (docs/dref-lunar-lander.md, "Where Lunar Lander's gap
+builds").
 
     python3 benches/grids/gap_stretches.py \
         docs/results/fig3-lunar-lander-150k/lunar-lander/dref \
