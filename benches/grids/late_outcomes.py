@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from gap_stretches import finished_seeds
-from rows import exact_p_above, mean_se
+from rows import exact_p_above, mean_return, mean_se
 
 
 @dataclass
@@ -45,14 +45,13 @@ def late_outcomes(run: Path, start: int) -> Late:
     def share(outcome: str) -> float:
         return sum(r["outcome"] == outcome for r in late) / n
 
-    returns = [float(r["return"]) for r in late]
     return Late(
         episodes=n,
         landed=share("success"),
         failed=share("failure"),
         time_limit=share("time_limit"),
-        mean_return=sum(returns) / n,
-        reward=sum(returns),
+        mean_return=mean_return(late),
+        reward=sum(float(r["return"]) for r in late),
     )
 
 
