@@ -72,6 +72,84 @@ fn sim_is_reproducible_from_its_seed() {
 }
 
 #[test]
+fn sim_writes_every_step_with_its_abstract_state_and_each_episode_ends_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("steps.csv");
+    let run = |noise: &str| {
+        let out = dualrep(&[
+            "sim",
+            "--task",
+            "lunar-lander",
+            "--episodes",
+            "4",
+            "--seed",
+            "3",
+            "--noise",
+            noise,
+            "--steps",
+            path.to_str().unwrap(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        (summary, std::fs::read_to_string(&path).unwrap())
+    };
+    let (summary, csv) = run("0.5");
+    assert_eq!(summary["noise"]["std"], 0.5);
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(header[..3], ["seed", "t", "obs_0"]);
+    assert_eq!(
+        header[header.len() - 3..],
+        ["reward", "abstract_state", "outcome"]
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let steps = summary["mean_length"].as_f64().unwrap() * 4.0;
+    assert_eq!(rows.len() as f64, steps, "one row per step");
+    let (x, y, angle, main) = (2, 3, 6, 10);
+    let mut ends = 0;
+    for (i, row) in rows.iter().enumerate() {
+        assert_eq!(row.len(), header.len());
+        let value = |c: usize| row[c].parse::<f32>().unwrap();
+        let bits = row[header.len() - 2];
+        assert_eq!(bits.len(), 10, "Lunar Lander's ten predicates");
+        // The graph's bits against the observation and action beside them.
+        assert_eq!(&bits[..1] == "1", value(x) < -0.28, "row {i}: {row:?}");
+        assert_eq!(&bits[5..6] == "1", value(y) > 0.0, "row {i}: {row:?}");
+        assert_eq!(
+            &bits[6..7] == "1",
+            value(angle).abs() < 0.5,
+            "row {i}: {row:?}"
+        );
+        assert_eq!(&bits[7..8] == "1", value(main) > 0.0, "row {i}: {row:?}");
+        let outcome = row[header.len() - 1];
+        let last = rows.get(i + 1).is_none_or(|next| next[1] == "0");
+        assert_eq!(
+            !outcome.is_empty(),
+            last,
+            "an outcome on each episode's last step only"
+        );
+        ends += usize::from(last);
+    }
+    assert_eq!(ends, 4);
+    // No noise, the heuristic's own episodes: it lands (tasks.md), where the noisy one differs.
+    let (quiet, quiet_csv) = run("0");
+    assert_eq!(quiet["noise"]["std"], 0.0);
+    assert_ne!(quiet_csv, csv);
+    assert_rejected(
+        &["sim", "--task", "lunar-lander", "--noise=-0.1"],
+        "noise std -0.1: give a finite number at least 0",
+    );
+    assert_rejected(
+        &["sim", "--task", "lunar-lander", "--noise-correlation", "1"],
+        "noise correlation 1: give a number in [0, 1)",
+    );
+}
+
+#[test]
 fn bench_sac_reports_the_work_it_skips_beside_the_nominal_work() {
     // Reaching's sizes with the human critic: obs 15, act 4, [64, 64], batch 512 (debug build,
     // so the rates mean nothing; the arithmetic does).
