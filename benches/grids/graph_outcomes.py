@@ -1,20 +1,23 @@
 #!/usr/bin/env python3
-"""What Lunar Lander's scene graph tells of how a descent ends: from `dualrep sim --steps` (every
-step of a noisy heuristic's episodes, with the product's abstract state), the steps shortly
-before each episode's end, labelled by whether it ended failed (crash or off the screen) or
-landed; episodes that reach the time limit are left out. For each way of cutting the steps into
-cells, the share of the outcome's entropy the cell carries (plug-in, pooled steps) and the
-held-out AUC of the cell's failure share as a score (fitted on the episodes of even seeds,
-scored on the odd ones and the other way round, averaged) (docs/dref-lunar-lander.md, "What the
-scene graph can see of a landing").
+"""What Lunar Lander's scene graph tells of how a descent ends, from `dualrep sim --steps` (every
+step of a noisy heuristic's episodes, with the product's abstract state). For each way of
+cutting steps into cells it prints the share of the label's entropy the cell carries (plug-in,
+pooled steps; biased up for many small cells) and the held-out AUC of the cell's failure share as
+a score (fitted on the episodes of even seeds, scored on the odd ones and the other way round,
+averaged) (docs/results/lunar-graph-outcomes/README.md).
 
-    target/release/dualrep sim --task lunar-lander --episodes 2000 --noise 0.6 --steps steps.csv
-    python3 benches/grids/graph_outcomes.py steps.csv [--before 55] [--skip 5]
+    dualrep sim --task lunar-lander --episodes 2000 --noise 0.5 --noise-correlation 0.95 \
+        --steps steps.csv
+    python3 benches/grids/graph_outcomes.py steps.csv [--before 55] [--skip 5] \
+        [--align end|touchdown] [--question outcome|moment]
 
-The cuts: the graph's abstract state; the graph with one more predicate, on falling speed
-(`obs_3` above its median over the window's steps); and the falling speed alone, in as many
-equal-count bins as the graph fills, so that a cut of the same size on the low-level state is
-beside it.
+Two questions, over the episodes that landed or failed (time-limit episodes left out):
+`outcome` tells a window's steps (from `before` to `skip` steps before the episode's end, or
+before its first leg contact) of failed episodes from those of landed ones; `moment` tells a
+failed episode's window before touchdown from every other step of flight, as a query rule that
+meant to ask before failures would have to. The cuts: the graph's abstract state; the graph and
+one more predicate, falling speed above its median over the steps; falling speed alone in as
+many equal-count bins as the graph fills; and the graph's height bits alone.
 """
 
 from __future__ import annotations
@@ -30,33 +33,68 @@ from rows import midranks
 
 
 @dataclass
-class WindowStep:
+class Step:
     seed: int
     state: str
     fall_speed: float
-    failed: bool
+    label: bool
 
 
-def window_steps(path: Path, before: int, skip: int) -> tuple[list[WindowStep], Counter[str]]:
-    """The steps t with length - before <= t < length - skip of every episode that landed or
-    failed, and how many episodes ended each way."""
+def episodes_of(path: Path) -> dict[int, list[dict[str, str]]]:
     episodes: dict[int, list[dict[str, str]]] = defaultdict(list)
     with path.open() as f:
         for row in csv.DictReader(f):
             episodes[int(row["seed"])].append(row)
-    endings: Counter[str] = Counter()
-    steps: list[WindowStep] = []
+    return episodes
+
+
+def touchdown(rows: list[dict[str, str]]) -> int | None:
+    """The first step on which a leg touches (`obs_6` or `obs_7`), or the last step if the episode
+    failed on the ground without one; None if it ended off the screen (|x| >= 1), which is no
+    descent."""
+    for i, row in enumerate(rows):
+        if row["obs_6"] != "0" or row["obs_7"] != "0":
+            return i
+    return None if abs(float(rows[-1]["obs_0"])) >= 1.0 else len(rows) - 1
+
+
+def labelled_steps(
+    episodes: dict[int, list[dict[str, str]]], before: int, skip: int, align: str, question: str
+) -> list[Step]:
+    """The steps the question is asked of, each labelled True for a failure.
+
+    `outcome`: the steps t with anchor - before <= t < anchor - skip of every episode that landed
+    or failed, labelled by how it ended. The anchor is the episode's end or (`align` touchdown) its
+    first leg contact: a landing's last half second is spent at rest (the rest rule asks 25 steps
+    without engines), which an end-anchored window compares with a failure's flight.
+    `moment`: every step before touchdown of every episode that landed or failed, labelled True
+    in a failed episode's window (anchored at touchdown): can the cell pick out the moments
+    before a failure among all the moments of flight, as a query rule would have to?"""
+    steps: list[Step] = []
     for seed, rows in episodes.items():
         outcome = rows[-1]["outcome"]
-        endings[outcome] += 1
         if outcome not in ("success", "failure"):
             continue
-        n = len(rows)
-        for row in rows[max(0, n - before) : max(0, n - skip)]:
-            steps.append(
-                WindowStep(seed, row["abstract_state"], float(row["obs_3"]), outcome == "failure")
-            )
-    return steps, endings
+        touch = touchdown(rows)
+        anchor = len(rows) if align == "end" and question == "outcome" else touch
+        if anchor is None:
+            continue
+        failed = outcome == "failure"
+        first, last = max(0, anchor - before), max(0, anchor - skip)
+        span = range(first, last) if question == "outcome" else range(anchor)
+        for t in span:
+            row = rows[t]
+            label = failed and (question == "outcome" or first <= t < last)
+            steps.append(Step(seed, row["abstract_state"], float(row["obs_3"]), label))
+    return steps
+
+
+def endings(episodes: dict[int, list[dict[str, str]]]) -> Counter[str]:
+    counts: Counter[str] = Counter(rows[-1]["outcome"] for rows in episodes.values())
+    counts["off the screen"] = sum(
+        rows[-1]["outcome"] == "failure" and touchdown(rows) is None for rows in episodes.values()
+    )
+    return counts
 
 
 def entropy(p: float) -> float:
@@ -112,34 +150,55 @@ def main() -> None:
     parser.add_argument("steps", type=Path, help="a `dualrep sim --steps` file (Lunar Lander)")
     parser.add_argument("--before", type=int, default=55, help="window start, steps before the end")
     parser.add_argument("--skip", type=int, default=5, help="steps left out at the very end")
+    parser.add_argument(
+        "--align",
+        choices=("end", "touchdown"),
+        default="end",
+        help="count the window back from the episode's end or from its first leg contact "
+        "(failures off the screen left out)",
+    )
+    parser.add_argument(
+        "--question",
+        choices=("outcome", "moment"),
+        default="outcome",
+        help="outcome: tell the window's steps of failed episodes from landed ones'; moment: "
+        "tell the window's steps of failed episodes from every other step of flight",
+    )
     args = parser.parse_args()
     if not 0 <= args.skip < args.before:
         parser.error(f"--skip {args.skip} must be at least 0 and below --before {args.before}")
 
-    steps, endings = window_steps(args.steps, args.before, args.skip)
-    failed = [s.failed for s in steps]
-    seeds = [s.seed for s in steps]
-    ended = endings["success"] + endings["failure"]
+    episodes = episodes_of(args.steps)
+    ends = endings(episodes)
+    ended = ends["success"] + ends["failure"]
     print(
-        f"episodes: {sum(endings.values())} ({endings['success']} landed, "
-        f"{endings['failure']} failed, {endings['time_limit']} time limit); "
-        f"of those that landed or failed, {endings['failure'] / ended:.3f} failed"
+        f"episodes: {len(episodes)} ({ends['success']} landed, {ends['failure']} failed, "
+        f"{ends['time_limit']} time limit); of those that landed or failed, "
+        f"{ends['failure'] / ended:.3f} failed; {ends['off the screen']} of the failures off the "
+        "screen (no touchdown: left out where the window is anchored at one)"
     )
+    steps = labelled_steps(episodes, args.before, args.skip, args.align, args.question)
+    failed = [s.label for s in steps]
+    seeds = [s.seed for s in steps]
+    anchor = "touchdown" if args.question == "moment" else args.align
     print(
-        f"window: steps {args.before} to {args.skip} before the end, {len(steps)} steps, "
-        f"{sum(failed) / len(steps):.3f} of them in failed episodes"
+        f"question: {args.question}; window: steps {args.before} to {args.skip} before the "
+        f"{anchor}; {len(steps)} steps, {sum(failed) / len(steps):.3f} of them labelled failure"
     )
     graph = [s.state for s in steps]
     median = sorted(s.fall_speed for s in steps)[len(steps) // 2]
     graph_speed = [f"{s.state}{int(s.fall_speed > median)}" for s in steps]
     filled = len(set(graph))
     speed_bins = equal_count_bins([s.fall_speed for s in steps], filled)
-    print("| cut | cells | outcome entropy carried | held-out AUC |")
+    # Bits 3-5: above the flags (twice, one per flag) and above the pad's level.
+    height = [s.state[3:6] for s in steps]
+    print("| cut | cells | label entropy carried | held-out AUC |")
     print("|---|---:|---:|---:|")
     for name, cells in (
         ("the scene graph", graph),
         (f"the graph + falling speed above its median ({median:.3f})", graph_speed),
         ("falling speed alone, equal-count bins", speed_bins),
+        ("the graph's height bits alone", height),
     ):
         print(
             f"| {name} | {len(set(cells))} | {information_share(cells, failed):.3f} "
