@@ -95,6 +95,20 @@ impl ActionNoise {
         }
         Ok(self)
     }
+
+    /// Move `drift`, the noise on each of `dim` action dimensions, one step on: drawn from the
+    /// stationary law when it is empty (an episode's first step), else by the AR(1) rule.
+    pub fn advance(self, drift: &mut Vec<f32>, dim: usize, rng: &mut impl Rng) {
+        if drift.is_empty() {
+            drift.extend((0..dim).map(|_| self.std * rng.sample::<f32, _>(StandardNormal)));
+            return;
+        }
+        let innovation = (1.0 - self.correlation * self.correlation).sqrt() * self.std;
+        for n in drift.iter_mut() {
+            let e: f32 = rng.sample(StandardNormal);
+            *n = self.correlation * *n + innovation * e;
+        }
+    }
 }
 
 /// An [`ActionNoise`] that is no noise process.
@@ -142,7 +156,6 @@ pub fn run_episode_watched(
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_ac71_0000_0001);
     let mut action = vec![0.0f32; action_dim];
     let mut drift: Vec<f32> = Vec::new();
-    let innovation = (1.0 - noise.correlation * noise.correlation).sqrt();
     let (mut episode_return, mut length) = (0.0f64, 0u32);
     loop {
         match policy {
@@ -152,16 +165,7 @@ pub fn run_episode_watched(
             SimplePolicy::Heuristic => action.copy_from_slice(&task.heuristic(&obs)),
         }
         if noise.std > 0.0 {
-            if drift.is_empty() {
-                drift = (0..action_dim)
-                    .map(|_| noise.std * rng.sample::<f32, _>(StandardNormal))
-                    .collect();
-            } else {
-                for n in &mut drift {
-                    let e: f32 = rng.sample(StandardNormal);
-                    *n = noise.correlation * *n + innovation * noise.std * e;
-                }
-            }
+            noise.advance(&mut drift, action_dim, &mut rng);
             for (a, n) in action.iter_mut().zip(&drift) {
                 *a = (*a + n).clamp(-1.0, 1.0);
             }
@@ -288,4 +292,67 @@ pub fn run_episodes_watched(
         steps_per_second: total_steps / seconds.max(1e-9),
     };
     (summary, runs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The noise's law: each step's standard deviation is `std` from the first step on, and one
+    /// step's noise keeps `correlation` of the last's.
+    #[test]
+    fn action_noise_has_its_std_and_its_step_to_step_correlation() {
+        for (std, correlation) in [(0.5f32, 0.95f32), (0.3, 0.0), (1.0, 0.6)] {
+            let noise = ActionNoise { std, correlation };
+            let mut rng = ChaCha8Rng::seed_from_u64(7);
+            let (mut first, mut pairs, mut lagged) = (Vec::new(), Vec::new(), Vec::new());
+            for _ in 0..2_000 {
+                let mut drift = Vec::new();
+                noise.advance(&mut drift, 2, &mut rng);
+                first.extend(drift.iter().copied());
+                for _ in 0..20 {
+                    let last = drift.clone();
+                    noise.advance(&mut drift, 2, &mut rng);
+                    pairs.extend(last.iter().zip(&drift).map(|(a, b)| (*a, *b)));
+                }
+                lagged.extend(drift.iter().copied());
+            }
+            let sd = |xs: &[f32]| {
+                (xs.iter().map(|x| f64::from(*x).powi(2)).sum::<f64>() / xs.len() as f64).sqrt()
+            };
+            for (name, xs) in [("first step", &first), ("twenty steps on", &lagged)] {
+                let got = sd(xs);
+                assert!(
+                    (got / f64::from(std) - 1.0).abs() < 0.05,
+                    "{name}: sd {got} for std {std} at correlation {correlation}"
+                );
+            }
+            let product: f64 = pairs
+                .iter()
+                .map(|(a, b)| f64::from(*a) * f64::from(*b))
+                .sum();
+            let lag1 = product / pairs.len() as f64 / f64::from(std).powi(2);
+            assert!(
+                (lag1 - f64::from(correlation)).abs() < 0.02,
+                "lag-1 correlation {lag1} for {correlation}"
+            );
+        }
+    }
+
+    #[test]
+    fn no_noise_leaves_the_episode_as_it_was() {
+        let mut env = Task::LunarLander.make_env_with(&EnvOptions::default());
+        let plain = run_episode(env.as_mut(), Task::LunarLander, SimplePolicy::Random, 4);
+        let mut seen = 0u32;
+        let watched = run_episode_watched(
+            env.as_mut(),
+            Task::LunarLander,
+            SimplePolicy::Random,
+            ActionNoise::NONE,
+            4,
+            &mut |_| seen += 1,
+        );
+        assert_eq!(plain, watched);
+        assert_eq!(seen, plain.length);
+    }
 }
