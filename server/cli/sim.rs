@@ -1,27 +1,38 @@
-//! `dualrep sim`: episodes of a random or heuristic policy, summarised as one JSON object, and
-//! optionally every step of them as CSV with the scene graph's abstract state.
+//! `dualrep sim`: episodes of a random or heuristic policy, or of the policy a `train` run's
+//! checkpoint had learnt, summarised as one JSON object, and optionally every step of them as
+//! CSV with the scene graph's abstract state.
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::fs;
+use std::path::{Path, PathBuf};
 
-use anyhow::Context;
+use anyhow::{Context, bail};
 use clap::Args;
 
 use super::output::write_atomically;
 use super::overrides::parse_pair;
+use crate::guidance::evaluative_run::EvaluativeRun;
+use crate::rl::Sac;
 use crate::scene_graph::SceneGraph;
 use crate::settings::Settings;
-use crate::sim::Task;
-use crate::sim::rollout::{ActionNoise, SimplePolicy, StepSeen, run_episodes_watched};
+use crate::sim::rollout::{ActionNoise, Actor, SimplePolicy, StepSeen, run_episodes_watched};
+use crate::sim::{EnvOptions, Task, TaskRef};
 
 #[derive(Debug, Args)]
 pub struct SimArgs {
-    /// reaching, placing or lunar-lander.
-    #[arg(long)]
-    pub task: Task,
+    /// reaching, placing or lunar-lander (with --checkpoint: the run's, if given).
+    #[arg(long, required_unless_present = "checkpoint")]
+    pub task: Option<Task>,
     /// random or heuristic.
     #[arg(long, default_value = "heuristic")]
     pub policy: SimplePolicy,
+    /// Act with the policy a `train` run had learnt: its `checkpoint.run` (a running or stopped
+    /// run's), sampled as in training; the env's version and the scene graph are the run's.
+    #[arg(long, value_name = "PATH", conflicts_with_all = ["policy", "options"])]
+    pub checkpoint: Option<PathBuf>,
+    /// With --checkpoint: act with the mean action (tanh of the mean) instead of sampling.
+    #[arg(long, requires = "checkpoint")]
+    pub deterministic: bool,
     /// Number of episodes (seeds seed, seed + 1, ...).
     #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
     pub episodes: u32,
@@ -36,8 +47,8 @@ pub struct SimArgs {
     #[arg(long, default_value_t = 0.0)]
     pub noise_correlation: f32,
     /// Write every step here as CSV: seed, t, the observation after the step, the action, the
-    /// reward, the product's scene graph on them (its abstract state as bits, predicate order)
-    /// and, on an episode's last step, its outcome.
+    /// reward, the scene graph on them (the product's, or the checkpoint's run's; its abstract
+    /// state as bits, predicate order) and, on an episode's last step, its outcome.
     #[arg(long, value_name = "PATH")]
     pub steps: Option<PathBuf>,
     /// Choose the task's version: `--set variant=uniform`, `--set release_at=0.9`,
@@ -53,18 +64,41 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
     }
     .check()
     .context("--noise, --noise-correlation")?;
-    let options = Settings::from_pairs(args.options.iter().map(|(k, v)| (k.as_str(), v.as_str())))
-        .and_then(|s| s.env_options(args.task))?;
-    let mut steps = args.steps.as_ref().map(|_| StepTable::new(args.task));
+    let (task, options, graph, mut learned) = match &args.checkpoint {
+        None => {
+            let task = args
+                .task
+                .expect("clap requires --task without --checkpoint");
+            let options =
+                Settings::from_pairs(args.options.iter().map(|(k, v)| (k.as_str(), v.as_str())))
+                    .and_then(|s| s.env_options(task))?;
+            (task, options, SceneGraph::for_task(task), None)
+        }
+        Some(path) => {
+            let (task, options, graph, learner) = checkpoint_policy(path, args.task)?;
+            (task, options, graph, Some(learner))
+        }
+    };
+    let mut steps = args.steps.as_ref().map(|_| StepTable::new(graph));
     let mut watch = |seen: StepSeen<'_>| {
         if let Some(table) = steps.as_mut() {
             table.push(&seen);
         }
     };
+    let deterministic = args.deterministic;
+    let mut act = |obs: &[f32], action: &mut [f32]| {
+        if let Some(learner) = learned.as_mut() {
+            learner.act(obs, deterministic, action);
+        }
+    };
+    let mut actor = match args.checkpoint {
+        None => Actor::Simple(args.policy),
+        Some(_) => Actor::Learned(&mut act),
+    };
     let (summary, _) = run_episodes_watched(
-        args.task,
+        task,
         &options,
-        args.policy,
+        &mut actor,
         noise,
         args.episodes,
         args.seed,
@@ -78,6 +112,31 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The task, env version, scene graph and learner of a `train` run's checkpoint at `path`;
+/// `task`, if given, must be the run's.
+fn checkpoint_policy(
+    path: &Path,
+    task: Option<Task>,
+) -> anyhow::Result<(Task, EnvOptions, SceneGraph, Sac)> {
+    let bytes = fs::read(path).with_context(|| format!("--checkpoint {}", path.display()))?;
+    let (config, learner, steps) = EvaluativeRun::checkpoint_learner(&bytes)
+        .with_context(|| format!("--checkpoint {}", path.display()))?;
+    let TaskRef::Builtin(run_task) = config.task else {
+        bail!(
+            "--checkpoint {}: its run's env lived in another process; sim runs our tasks only",
+            path.display()
+        );
+    };
+    if let Some(asked) = task.filter(|t| *t != run_task) {
+        bail!(
+            "--task {asked}: the checkpoint {} is of a {run_task} run",
+            path.display()
+        );
+    }
+    eprintln!("sim: the policy of {} after {steps} steps", path.display());
+    Ok((run_task, config.env, config.scene_graph, learner))
+}
+
 /// The steps of `sim --steps`, one CSV row each, built as the episodes run.
 struct StepTable {
     graph: SceneGraph,
@@ -88,9 +147,9 @@ struct StepTable {
 }
 
 impl StepTable {
-    fn new(task: Task) -> Self {
+    fn new(graph: SceneGraph) -> Self {
         Self {
-            graph: SceneGraph::for_task(task),
+            graph,
             csv: String::new(),
             header_written: false,
         }

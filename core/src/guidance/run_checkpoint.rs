@@ -198,6 +198,26 @@ impl EvaluativeRun {
         Ok(state.kernels)
     }
 
+    /// The learner a checkpoint holds, with its run's config and the steps it had taken, read
+    /// without resuming the run: to roll out the policy it had learnt (`dualrep sim
+    /// --checkpoint`).
+    pub fn checkpoint_learner(
+        bytes: &[u8],
+    ) -> Result<(EvaluativeRunConfig, Sac, u64), RunCheckpointError> {
+        use RunCheckpointError as E;
+        let rest = bytes.strip_prefix(MAGIC).ok_or(E::NotACheckpoint)?;
+        let (state, rest) = split_blob(rest).ok_or(E::Truncated("state"))?;
+        let (learner, _) = split_blob(rest).ok_or(E::Truncated("learner"))?;
+        #[derive(Deserialize)]
+        struct Head {
+            config: EvaluativeRunConfig,
+            steps: u64,
+        }
+        let head: Head = serde_json::from_slice(state).map_err(E::State)?;
+        let learner = Sac::from_safetensors(learner).map_err(E::Learner)?;
+        Ok((head.config, learner, head.steps))
+    }
+
     /// The replay buffer a checkpoint holds (what its learner trains on), read without
     /// resuming the run: to see which answers a stopped session's learner had.
     pub fn checkpoint_replay(bytes: &[u8]) -> Result<ReplayBuffer, RunCheckpointError> {

@@ -57,6 +57,23 @@ impl FromStr for SimplePolicy {
     }
 }
 
+/// What chooses an episode's actions: a policy that needs no learning, or a learned one.
+pub enum Actor<'a> {
+    Simple(SimplePolicy),
+    /// A learned policy (a learner's actor, say): writes its action for an observation.
+    Learned(&'a mut dyn FnMut(&[f32], &mut [f32])),
+}
+
+impl Actor<'_> {
+    /// The name a summary gives it: `random`, `heuristic` or `learned`.
+    pub fn id(&self) -> &'static str {
+        match self {
+            Actor::Simple(policy) => policy.id(),
+            Actor::Learned(_) => "learned",
+        }
+    }
+}
+
 /// One finished episode.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Episode {
@@ -138,15 +155,17 @@ pub struct StepSeen<'a> {
 /// Run one episode of `policy` from `seed`. Random actions come from their own generator,
 /// seeded from `seed`, so an episode is reproducible from its seed alone.
 pub fn run_episode(env: &mut dyn Env, task: Task, policy: SimplePolicy, seed: u64) -> Episode {
-    run_episode_watched(env, task, policy, ActionNoise::NONE, seed, &mut |_| {})
+    let mut actor = Actor::Simple(policy);
+    run_episode_watched(env, task, &mut actor, ActionNoise::NONE, seed, &mut |_| {})
 }
 
-/// As [`run_episode`], with `noise` added to each action (then clipped to `[-1, 1]`) and `watch`
-/// shown every step. With a std of 0 no noise is drawn, so the episode is [`run_episode`]'s.
+/// As [`run_episode`], acted by `actor`, with `noise` added to each action (then clipped to
+/// `[-1, 1]`) and `watch` shown every step. With a std of 0 no noise is drawn, so a simple
+/// policy's episode is [`run_episode`]'s.
 pub fn run_episode_watched(
     env: &mut dyn Env,
     task: Task,
-    policy: SimplePolicy,
+    actor: &mut Actor<'_>,
     noise: ActionNoise,
     seed: u64,
     watch: &mut dyn FnMut(StepSeen<'_>),
@@ -158,11 +177,12 @@ pub fn run_episode_watched(
     let mut drift: Vec<f32> = Vec::new();
     let (mut episode_return, mut length) = (0.0f64, 0u32);
     loop {
-        match policy {
-            SimplePolicy::Random => action
+        match actor {
+            Actor::Simple(SimplePolicy::Random) => action
                 .iter_mut()
                 .for_each(|a| *a = rng.random_range(-1.0..=1.0)),
-            SimplePolicy::Heuristic => action.copy_from_slice(&task.heuristic(&obs)),
+            Actor::Simple(SimplePolicy::Heuristic) => action.copy_from_slice(&task.heuristic(&obs)),
+            Actor::Learned(act) => act(&obs, &mut action),
         }
         if noise.std > 0.0 {
             noise.advance(&mut drift, action_dim, &mut rng);
@@ -200,7 +220,8 @@ pub struct SimSummary {
     /// The table-top task's version (none for Lunar Lander).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub env: Option<EnvOptions>,
-    pub policy: SimplePolicy,
+    /// `random`, `heuristic` or `learned` ([`Actor::id`]).
+    pub policy: String,
     /// The noise on each action (a std of 0: none).
     #[serde(default)]
     pub noise: ActionNoise,
@@ -235,7 +256,7 @@ pub fn run_episodes_with(
     run_episodes_watched(
         task,
         options,
-        policy,
+        &mut Actor::Simple(policy),
         ActionNoise::NONE,
         episodes,
         seed,
@@ -243,12 +264,12 @@ pub fn run_episodes_with(
     )
 }
 
-/// As [`run_episodes_with`], each action with `noise`, and each step shown to `watch` (see
-/// [`run_episode_watched`]).
+/// As [`run_episodes_with`], acted by `actor`, each action with `noise`, and each step shown to
+/// `watch` (see [`run_episode_watched`]).
 pub fn run_episodes_watched(
     task: Task,
     options: &EnvOptions,
-    policy: SimplePolicy,
+    actor: &mut Actor<'_>,
     noise: ActionNoise,
     episodes: u32,
     seed: u64,
@@ -263,7 +284,7 @@ pub fn run_episodes_watched(
     let runs: Vec<Episode> = (0..u64::from(episodes))
         .map(|i| {
             let episode_seed = seed.wrapping_add(i);
-            run_episode_watched(env.as_mut(), task, policy, noise, episode_seed, watch)
+            run_episode_watched(env.as_mut(), task, actor, noise, episode_seed, watch)
         })
         .collect();
     let seconds = start.elapsed().as_secs_f64();
@@ -282,7 +303,7 @@ pub fn run_episodes_watched(
     let summary = SimSummary {
         task,
         env: (task != Task::LunarLander).then_some(*options),
-        policy,
+        policy: actor.id().to_string(),
         noise,
         episodes,
         mean_return,
@@ -347,7 +368,7 @@ mod tests {
         let watched = run_episode_watched(
             env.as_mut(),
             Task::LunarLander,
-            SimplePolicy::Random,
+            &mut Actor::Simple(SimplePolicy::Random),
             ActionNoise::NONE,
             4,
             &mut |_| seen += 1,
