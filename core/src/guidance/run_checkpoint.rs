@@ -483,4 +483,32 @@ mod tests {
         assert!(refused(b"hello", &config, &mut trainer).contains("not a dualrep"));
         assert!(EvaluativeRun::resume(&bytes, &config, &mut trainer).is_ok());
     }
+
+    #[test]
+    fn a_checkpoints_learner_acts_as_the_run_that_saved_it() {
+        let config = tiny(Task::LunarLander, "ef-100");
+        let mut trainer = oracle(Task::LunarLander);
+        let mut run = EvaluativeRun::new(config.clone(), 400);
+        drive(&mut run, &mut trainer, 300);
+        while !run.at_episode_start() {
+            run.step(&mut trainer);
+        }
+        let bytes = run.checkpoint(&trainer, serde_json::Value::Null);
+        let (read, mut learner, steps) = EvaluativeRun::checkpoint_learner(&bytes).unwrap();
+        assert_eq!((read, steps), (config, run.steps()));
+        assert!(learner.updates() > 0, "a learner that has trained");
+        let mut saved = run.into_learner();
+        let (mut ours, mut theirs) = ([0.0f32; 2], [0.0f32; 2]);
+        for i in 0..20 {
+            let obs: Vec<f32> = (0..8).map(|j| ((i * 8 + j) as f32 * 0.37).sin()).collect();
+            learner.act(&obs, i % 2 == 0, &mut ours);
+            saved.act(&obs, i % 2 == 0, &mut theirs);
+            assert_eq!(
+                ours, theirs,
+                "observation {i}: the same action, sampled or not"
+            );
+        }
+        assert!(EvaluativeRun::checkpoint_learner(&bytes[..40]).is_err());
+        assert!(EvaluativeRun::checkpoint_learner(b"hello").is_err());
+    }
 }
