@@ -14,6 +14,29 @@ fn dualrep(args: &[&str], dir: &Path) -> Output {
 
 const TINY: [&str; 4] = ["--set", "hidden=16,16", "--set", "batch_size=32"];
 
+/// `dualrep args` started in `d`, returned running once `file` (under `d`) exists.
+fn running_once<S: AsRef<std::ffi::OsStr>>(
+    args: &[S],
+    d: &Path,
+    file: &str,
+) -> std::process::Child {
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_dualrep"))
+        .args(args)
+        .current_dir(d)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    while !d.join(file).exists() {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before {file} was written"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child
+}
+
 /// Train a tiny expert for `task` into `d/models/<task>.safetensors`; its note.
 fn tiny_expert(d: &Path, task: &str, steps: &str, eval_episodes: &str) -> serde_json::Value {
     let out = format!("models/{task}.safetensors");
@@ -261,21 +284,8 @@ fn a_run_killed_midway_resumes_from_its_checkpoint_to_the_same_result() {
     ));
 
     // Kill the run as soon as its first checkpoint is on disk.
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_dualrep"))
-        .args(train("killed", "300", &[]))
-        .current_dir(d)
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
+    let mut child = running_once(&train("killed", "300", &[]), d, "killed/checkpoint.run");
     let checkpoint = d.join("killed/checkpoint.run");
-    while !checkpoint.exists() {
-        assert!(
-            child.try_wait().unwrap().is_none(),
-            "the run ended before its checkpoint"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(5));
-    }
     child.kill().unwrap();
     child.wait().unwrap();
     assert!(!d.join("killed/summary.json").exists());
@@ -348,18 +358,7 @@ fn sim_rolls_out_the_policy_of_a_runs_checkpoint() {
         "run",
     ];
     args.extend(TINY);
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_dualrep"))
-        .args(&args)
-        .current_dir(d)
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let checkpoint = d.join("run/checkpoint.run");
-    while !checkpoint.exists() {
-        assert!(child.try_wait().unwrap().is_none(), "the run ended first");
-        std::thread::sleep(std::time::Duration::from_millis(5));
-    }
+    let mut child = running_once(&args, d, "run/checkpoint.run");
     child.kill().unwrap();
     child.wait().unwrap();
 
@@ -441,19 +440,8 @@ fn a_second_train_on_a_running_folder_is_refused_and_touches_nothing() {
         args.extend(TINY);
         args.into_iter().map(String::from).collect::<Vec<_>>()
     };
-    let mut first = std::process::Command::new(env!("CARGO_BIN_EXE_dualrep"))
-        .args(train("1000000"))
-        .current_dir(d)
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
     // The first run holds the folder once it has written its configuration.
-    let metrics = d.join("run/metrics.csv");
-    while !metrics.exists() {
-        assert!(first.try_wait().unwrap().is_none(), "the first run ended");
-        std::thread::sleep(std::time::Duration::from_millis(5));
-    }
+    let mut first = running_once(&train("1000000"), d, "run/metrics.csv");
     let second = train("50");
     let out = dualrep(&second.iter().map(String::as_str).collect::<Vec<_>>(), d);
     assert!(!out.status.success(), "a second writer was let in");

@@ -205,9 +205,7 @@ impl EvaluativeRun {
         bytes: &[u8],
     ) -> Result<(EvaluativeRunConfig, Sac, u64), RunCheckpointError> {
         use RunCheckpointError as E;
-        let rest = bytes.strip_prefix(MAGIC).ok_or(E::NotACheckpoint)?;
-        let (state, rest) = split_blob(rest).ok_or(E::Truncated("state"))?;
-        let (learner, _) = split_blob(rest).ok_or(E::Truncated("learner"))?;
+        let (state, learner, _) = split_checkpoint(bytes)?;
         #[derive(Deserialize)]
         struct Head {
             config: EvaluativeRunConfig,
@@ -222,9 +220,7 @@ impl EvaluativeRun {
     /// resuming the run: to see which answers a stopped session's learner had.
     pub fn checkpoint_replay(bytes: &[u8]) -> Result<ReplayBuffer, RunCheckpointError> {
         use RunCheckpointError as E;
-        let rest = bytes.strip_prefix(MAGIC).ok_or(E::NotACheckpoint)?;
-        let (state, rest) = split_blob(rest).ok_or(E::Truncated("state"))?;
-        let (_, rows) = split_blob(rest).ok_or(E::Truncated("learner"))?;
+        let (state, _, rows) = split_checkpoint(bytes)?;
         #[derive(Deserialize)]
         struct Replay {
             replay: ReplayLayout,
@@ -253,9 +249,7 @@ impl EvaluativeRun {
         trainer: &mut dyn EvaluativeTrainer,
     ) -> Result<(Self, serde_json::Value), RunCheckpointError> {
         use RunCheckpointError as E;
-        let rest = bytes.strip_prefix(MAGIC).ok_or(E::NotACheckpoint)?;
-        let (state, rest) = split_blob(rest).ok_or(E::Truncated("state"))?;
-        let (learner, rows) = split_blob(rest).ok_or(E::Truncated("learner"))?;
+        let (state, learner, rows) = split_checkpoint(bytes)?;
         let state: RunState = serde_json::from_slice(state).map_err(E::State)?;
         if (&state.config.task, state.config.scene_graph) != (&config.task, config.scene_graph) {
             return Err(E::OtherSceneGraph);
@@ -303,6 +297,15 @@ impl EvaluativeRun {
 }
 
 /// A u64 LE length and that many bytes, then the rest.
+/// A checkpoint's three parts: the run's state (JSON), the learner (safetensors), the replay rows.
+fn split_checkpoint(bytes: &[u8]) -> Result<(&[u8], &[u8], &[u8]), RunCheckpointError> {
+    use RunCheckpointError as E;
+    let rest = bytes.strip_prefix(MAGIC).ok_or(E::NotACheckpoint)?;
+    let (state, rest) = split_blob(rest).ok_or(E::Truncated("state"))?;
+    let (learner, rows) = split_blob(rest).ok_or(E::Truncated("learner"))?;
+    Ok((state, learner, rows))
+}
+
 fn split_blob(bytes: &[u8]) -> Option<(&[u8], &[u8])> {
     let (len, rest) = bytes.split_first_chunk::<8>()?;
     let len = usize::try_from(u64::from_le_bytes(*len)).ok()?;
@@ -339,6 +342,24 @@ mod tests {
             episodes.extend(run.step(trainer).episode);
         }
         episodes
+    }
+
+    /// A run of `config` driven past `to` steps to its next episode start, its trainer, and the
+    /// checkpoint it saved there.
+    fn saved_past(
+        task: Task,
+        config: &EvaluativeRunConfig,
+        to: u64,
+        budget: u64,
+    ) -> (EvaluativeRun, ExpertOracle, Vec<u8>) {
+        let mut trainer = oracle(task);
+        let mut run = EvaluativeRun::new(config.clone(), budget);
+        drive(&mut run, &mut trainer, to);
+        while !run.at_episode_start() {
+            run.step(&mut trainer);
+        }
+        let bytes = run.checkpoint(&trainer, serde_json::Value::Null);
+        (run, trainer, bytes)
     }
 
     /// A faulty teacher (its own random stream) and a person's pace (its window of queries).
@@ -458,13 +479,7 @@ mod tests {
     #[test]
     fn a_checkpoint_of_another_run_or_broken_bytes_is_refused() {
         let config = tiny(Task::Placing, "dref");
-        let mut trainer = oracle(Task::Placing);
-        let mut run = EvaluativeRun::new(config.clone(), 100);
-        drive(&mut run, &mut trainer, 30);
-        while !run.at_episode_start() {
-            run.step(&mut trainer);
-        }
-        let bytes = run.checkpoint(&trainer, serde_json::Value::Null);
+        let (_, mut trainer, bytes) = saved_past(Task::Placing, &config, 30, 100);
         let mut other = config.clone();
         other.seed += 1;
         let refused = |b: &[u8], c: &EvaluativeRunConfig, t: &mut ExpertOracle| {
@@ -487,13 +502,7 @@ mod tests {
     #[test]
     fn a_checkpoints_learner_acts_as_the_run_that_saved_it() {
         let config = tiny(Task::LunarLander, "ef-100");
-        let mut trainer = oracle(Task::LunarLander);
-        let mut run = EvaluativeRun::new(config.clone(), 400);
-        drive(&mut run, &mut trainer, 300);
-        while !run.at_episode_start() {
-            run.step(&mut trainer);
-        }
-        let bytes = run.checkpoint(&trainer, serde_json::Value::Null);
+        let (run, _, bytes) = saved_past(Task::LunarLander, &config, 300, 400);
         let (read, mut learner, steps) = EvaluativeRun::checkpoint_learner(&bytes).unwrap();
         assert_eq!((read, steps), (config, run.steps()));
         assert!(learner.updates() > 0, "a learner that has trained");
