@@ -205,7 +205,7 @@ impl EvaluativeRun {
         bytes: &[u8],
     ) -> Result<(EvaluativeRunConfig, Sac, u64), RunCheckpointError> {
         use RunCheckpointError as E;
-        let (state, learner, _) = split_checkpoint(bytes)?;
+        let Parts { state, learner, .. } = split_checkpoint(bytes)?;
         #[derive(Deserialize)]
         struct Head {
             config: EvaluativeRunConfig,
@@ -220,7 +220,7 @@ impl EvaluativeRun {
     /// resuming the run: to see which answers a stopped session's learner had.
     pub fn checkpoint_replay(bytes: &[u8]) -> Result<ReplayBuffer, RunCheckpointError> {
         use RunCheckpointError as E;
-        let (state, _, rows) = split_checkpoint(bytes)?;
+        let Parts { state, rows, .. } = split_checkpoint(bytes)?;
         #[derive(Deserialize)]
         struct Replay {
             replay: ReplayLayout,
@@ -249,7 +249,11 @@ impl EvaluativeRun {
         trainer: &mut dyn EvaluativeTrainer,
     ) -> Result<(Self, serde_json::Value), RunCheckpointError> {
         use RunCheckpointError as E;
-        let (state, learner, rows) = split_checkpoint(bytes)?;
+        let Parts {
+            state,
+            learner,
+            rows,
+        } = split_checkpoint(bytes)?;
         let state: RunState = serde_json::from_slice(state).map_err(E::State)?;
         if (&state.config.task, state.config.scene_graph) != (&config.task, config.scene_graph) {
             return Err(E::OtherSceneGraph);
@@ -297,13 +301,26 @@ impl EvaluativeRun {
 }
 
 /// A u64 LE length and that many bytes, then the rest.
-/// A checkpoint's three parts: the run's state (JSON), the learner (safetensors), the replay rows.
-fn split_checkpoint(bytes: &[u8]) -> Result<(&[u8], &[u8], &[u8]), RunCheckpointError> {
+/// A checkpoint's three parts.
+struct Parts<'a> {
+    /// The run's state, JSON.
+    state: &'a [u8],
+    /// The learner, safetensors.
+    learner: &'a [u8],
+    /// The replay rows.
+    rows: &'a [u8],
+}
+
+fn split_checkpoint(bytes: &[u8]) -> Result<Parts<'_>, RunCheckpointError> {
     use RunCheckpointError as E;
     let rest = bytes.strip_prefix(MAGIC).ok_or(E::NotACheckpoint)?;
     let (state, rest) = split_blob(rest).ok_or(E::Truncated("state"))?;
     let (learner, rows) = split_blob(rest).ok_or(E::Truncated("learner"))?;
-    Ok((state, learner, rows))
+    Ok(Parts {
+        state,
+        learner,
+        rows,
+    })
 }
 
 fn split_blob(bytes: &[u8]) -> Option<(&[u8], &[u8])> {
