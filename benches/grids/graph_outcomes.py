@@ -24,7 +24,9 @@ from __future__ import annotations
 
 import argparse
 import csv
+import json
 import math
+import struct
 from collections import Counter, defaultdict
 from dataclasses import dataclass
 from pathlib import Path
@@ -129,14 +131,48 @@ def held_out_auc(cells: list[str], failed: list[bool], seeds: list[int]) -> floa
             for c, y, s in zip(cells, failed, seeds)
             if s % 2 != fit_parity
         ]
-        ranks = midranks([score for score, _ in scored])
-        n_failed = sum(y for _, y in scored)
-        n_landed = len(scored) - n_failed
-        # Mann-Whitney's U of the failed steps' scores over the landed ones', from midranks
-        # (rows.py's pairwise u_statistic is quadratic, too slow for this many steps).
-        u = sum(r for r, (_, y) in zip(ranks, scored) if y) - n_failed * (n_failed + 1) / 2
-        aucs.append(u / (n_failed * n_landed))
+        aucs.append(auc([score for score, _ in scored], [y for _, y in scored]))
     return sum(aucs) / len(aucs)
+
+
+def rule_scores(checkpoint: Path, dim: int) -> tuple[dict[str, float], dict[str, float], float]:
+    """The DREF rule's UCB and mean |H - H_hat| per abstract state (as bit strings of `dim`
+    predicates, predicate 0 first) in a `train` run checkpoint, and the score of a state never
+    answered. The file is
+    `dualrep-run/1\n`, a u64 LE length and the run's state as JSON, then the learner and replay
+    (core/src/guidance/run_checkpoint.rs)."""
+    data = checkpoint.read_bytes()
+    magic = b"dualrep-run/1\n"
+    if not data.startswith(magic):
+        raise SystemExit(f"{checkpoint}: not a dualrep run checkpoint")
+    (length,) = struct.unpack_from("<Q", data, len(magic))
+    start = len(magic) + 8
+    state = json.loads(data[start : start + length])
+    rule = state["schedule"].get("dref")
+    if rule is None:
+        raise SystemExit(f"{checkpoint}: its run has no DREF rule")
+    total, c, form = rule["total"], rule["c"], rule["form"]
+
+    def ucb(count: int, mean_error: float) -> float:
+        if form == "authors":
+            return mean_error + c * math.sqrt(2 * total / (count + 1))
+        return math.inf if count == 0 else mean_error + c * math.sqrt(2 * math.log(total) / count)
+
+    scores, errors = {}, {}
+    for key, stats in rule["stats"].items():
+        bits = "".join("1" if (int(key) >> i) & 1 else "0" for i in range(dim))
+        scores[bits] = ucb(stats["count"], stats["mean_error"])
+        errors[bits] = stats["mean_error"]
+    return scores, errors, ucb(0, 0.0)
+
+
+def auc(scores: list[float], labels: list[bool]) -> float:
+    """Mann-Whitney's U of the labelled steps' scores over the others', over the pairs, from
+    midranks (rows.py's pairwise u_statistic is quadratic, too slow for this many steps)."""
+    ranks = midranks(scores)
+    n_true = sum(labels)
+    u = sum(r for r, y in zip(ranks, labels) if y) - n_true * (n_true + 1) / 2
+    return u / (n_true * (len(labels) - n_true))
 
 
 def equal_count_bins(values: list[float], bins: int) -> list[str]:
@@ -163,6 +199,13 @@ def main() -> None:
         default="outcome",
         help="outcome: tell the window's steps of failed episodes from landed ones'; moment: "
         "tell the window's steps of failed episodes from every other step of flight",
+    )
+    parser.add_argument(
+        "--rule-from",
+        type=Path,
+        metavar="CHECKPOINT",
+        help="also score every step by the DREF rule's UCB (and its mean |H - H_hat| alone) of "
+        "its abstract state in this `train` run checkpoint: their AUC, nothing fitted",
     )
     args = parser.parse_args()
     if not 0 <= args.skip < args.before:
@@ -204,6 +247,20 @@ def main() -> None:
             f"| {name} | {len(set(cells))} | {information_share(cells, failed):.3f} "
             f"| {held_out_auc(cells, failed, seeds):.3f} |"
         )
+    if args.rule_from:
+        scores, errors, unanswered = rule_scores(args.rule_from, len(steps[0].state))
+        ucb = [scores.get(s.state, unanswered) for s in steps]
+        # A state never answered has no error of its own: it ranks below every answered one.
+        error = [errors.get(s.state, -1.0) for s in steps]
+        answered = sum(s.state in scores for s in steps) / len(steps)
+        print(
+            f"\nthe rule at {args.rule_from.name}: {answered:.3f} of the steps are in states it has "
+            f"answered; {unanswered:.1f} is the score of a state never answered"
+        )
+        print("| the rule's | AUC, all steps |")
+        print("|---|---:|")
+        print(f"| UCB | {auc(ucb, failed):.3f} |")
+        print(f"| mean \\|H - H_hat\\| alone | {auc(error, failed):.3f} |")
 
 
 if __name__ == "__main__":
