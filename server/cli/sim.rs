@@ -86,14 +86,13 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
         }
     };
     let deterministic = args.deterministic;
-    let mut act = |obs: &[f32], action: &mut [f32]| {
-        if let Some(learner) = learned.as_mut() {
-            learner.act(obs, deterministic, action);
-        }
-    };
-    let mut actor = match args.checkpoint {
+    let mut act;
+    let mut actor = match learned.as_mut() {
         None => Actor::Simple(args.policy),
-        Some(_) => Actor::Learned(&mut act),
+        Some(learner) => {
+            act = |obs: &[f32], action: &mut [f32]| learner.act(obs, deterministic, action);
+            Actor::Learned(&mut act)
+        }
     };
     let (summary, _) = run_episodes_watched(
         task,
