@@ -300,7 +300,6 @@ impl EvaluativeRun {
     }
 }
 
-/// A u64 LE length and that many bytes, then the rest.
 /// A checkpoint's three parts.
 struct Parts<'a> {
     /// The run's state, JSON.
@@ -323,6 +322,7 @@ fn split_checkpoint(bytes: &[u8]) -> Result<Parts<'_>, RunCheckpointError> {
     })
 }
 
+/// A u64 LE length and that many bytes, then the rest.
 fn split_blob(bytes: &[u8]) -> Option<(&[u8], &[u8])> {
     let (len, rest) = bytes.split_first_chunk::<8>()?;
     let len = usize::try_from(u64::from_le_bytes(*len)).ok()?;
