@@ -26,6 +26,7 @@ mod security_headers;
 mod serving_proxy;
 mod serving_several;
 mod session_recording;
+mod sim_checkpoint;
 mod slurm;
 mod store;
 mod store_people;

@@ -23,3 +23,26 @@ pub fn ok(out: &Output) -> serde_json::Value {
     let stdout = String::from_utf8_lossy(&out.stdout);
     serde_json::from_str(stdout.lines().last().expect("a summary line")).unwrap()
 }
+
+/// `dualrep args` started in `d`, returned running once `file` (under `d`) exists.
+pub fn running_once<S: AsRef<std::ffi::OsStr>>(
+    args: &[S],
+    d: &Path,
+    file: &str,
+) -> std::process::Child {
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_dualrep"))
+        .args(args)
+        .current_dir(d)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    while !d.join(file).exists() {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before {file} was written"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child
+}
