@@ -1,5 +1,6 @@
-//! `dualrep sim --checkpoint` end to end: the policy a stopped `train` run had learnt, rolled
-//! out step by step, and clear errors on a checkpoint that does not fit.
+//! `dualrep sim --checkpoint` end to end: the policy a stopped `train` run had learnt (or a
+//! finished one kept with `--keep-checkpoints`), rolled out step by step, and clear errors on a
+//! checkpoint that does not fit.
 
 use std::path::Path;
 use std::process::Output;
@@ -10,25 +11,20 @@ fn dualrep(args: &[&str], dir: &Path) -> Output {
     cli::dualrep_in(args, Some(dir))
 }
 
+/// `train` of a small SAC on Lunar Lander into `out`, checkpointing every `every` steps.
+fn small_lunar_sac<'a>(steps: &'a str, every: &'a str, out: &'a str) -> Vec<&'a str> {
+    let mut args = vec!["train", "--task", "lunar-lander", "--method", "sac"];
+    args.extend(["--steps", steps, "--checkpoint-every", every, "--out", out]);
+    args.extend(["--set", "hidden=16,16", "--set", "batch_size=32"]);
+    args
+}
+
 #[test]
 fn sim_rolls_out_the_policy_of_a_runs_checkpoint() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     // A SAC run on Lunar Lander, stopped once its first checkpoint is on disk.
-    let mut args = vec![
-        "train",
-        "--task",
-        "lunar-lander",
-        "--method",
-        "sac",
-        "--steps",
-        "5000",
-        "--checkpoint-every",
-        "200",
-        "--out",
-        "run",
-    ];
-    args.extend(["--set", "hidden=16,16", "--set", "batch_size=32"]);
+    let args = small_lunar_sac("5000", "200", "run");
     let mut child = running_once(&args, d, "run/checkpoint.run");
     child.kill().unwrap();
     child.wait().unwrap();
@@ -86,4 +82,73 @@ fn sim_rolls_out_the_policy_of_a_runs_checkpoint() {
     std::fs::write(d.join("junk.run"), b"hello").unwrap();
     let out = dualrep(&["sim", "--checkpoint", "junk.run"], d);
     assert!(String::from_utf8_lossy(&out.stderr).contains("not a dualrep"));
+}
+
+/// `train --keep-checkpoints`: every checkpoint outlives the run under `checkpoints/`, each with
+/// the bytes of its own step (a run resumed from the first one ends as the run did), and `sim`
+/// reads a finished run's policy from them.
+#[test]
+fn a_finished_run_keeps_each_checkpoint_by_its_step() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let train = |out: &str, keep: bool| {
+        let mut args = small_lunar_sac("1200", "300", out);
+        if keep {
+            args.push("--keep-checkpoints");
+        }
+        dualrep(&args, d)
+    };
+    let kept = ok(&train("kept", true));
+    assert!(
+        !d.join("kept/checkpoint.run").exists(),
+        "the run's own is removed"
+    );
+    let mut files: Vec<String> = std::fs::read_dir(d.join("kept/checkpoints"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    files.sort();
+    let steps: Vec<u64> = files
+        .iter()
+        .map(|f| f["step-".len()..f.len() - ".run".len()].parse().unwrap())
+        .collect();
+    assert!(steps.len() >= 2, "{files:?}");
+    for (i, step) in steps.iter().enumerate() {
+        assert!(*step >= 300 * (i as u64 + 1) && *step < 1200, "{files:?}");
+    }
+    // Without the flag nothing is kept, and the run is the same.
+    let plain = ok(&train("plain", false));
+    assert!(!d.join("plain/checkpoints").exists());
+    assert_eq!(plain["cumulative_return"], kept["cumulative_return"]);
+
+    // The first kept checkpoint is the run at its step: resumed from it, the run ends as it did.
+    let again = d.join("again");
+    std::fs::create_dir_all(&again).unwrap();
+    for file in ["metrics.csv", "learner.csv", "answers.csv"] {
+        if d.join("kept").join(file).exists() {
+            std::fs::copy(d.join("kept").join(file), again.join(file)).unwrap();
+        }
+    }
+    std::fs::copy(
+        d.join("kept/checkpoints").join(&files[0]),
+        again.join("checkpoint.run"),
+    )
+    .unwrap();
+    let out = train("again", false);
+    let resumed = ok(&out);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains(&format!("resumed from checkpoint.run at step {}", steps[0])),
+        "{stderr}"
+    );
+    assert_eq!(resumed["cumulative_return"], kept["cumulative_return"]);
+    assert_eq!(resumed["episodes"], kept["episodes"]);
+
+    // And `sim` acts with the policy of the last one.
+    let last = format!("kept/checkpoints/{}", files.last().unwrap());
+    let rolled = ok(&dualrep(
+        &["sim", "--checkpoint", &last, "--episodes", "1"],
+        d,
+    ));
+    assert_eq!(rolled["policy"], "learned");
 }

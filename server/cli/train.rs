@@ -6,6 +6,7 @@
 //! episode's start): a run stopped midway and started again with the same arguments goes on
 //! from there, bit for bit, and the file is removed once `summary.json` is written (the
 //! checkpoint, the folder's lock and what a resume keeps: `train_checkpoint.rs`).
+//! `--keep-checkpoints` also keeps each one under `checkpoints/` by its step, past the run's end.
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -21,7 +22,7 @@ use super::output::publish_summary;
 use super::overrides;
 use super::progress::Progress;
 use super::remote::RemoteArgs;
-pub use super::train_checkpoint::CHECKPOINT_FILE;
+pub use super::train_checkpoint::{CHECKPOINT_FILE, KEPT_CHECKPOINTS_DIR};
 use super::train_checkpoint::{
     Checkpointer, RECENT_EPISODES, ResumeNotes, keep_episodes, keep_kernels_of, lock_run_dir,
 };
@@ -61,6 +62,12 @@ pub struct TrainArgs {
     /// run resumes instead of starting over.
     #[arg(long, default_value_t = 10_000)]
     pub checkpoint_every: u64,
+    /// Also keep each checkpoint as OUT/checkpoints/step-<N>.run (N: the step it was taken at),
+    /// where the run's end leaves it: a finished run's policy and query rule at those steps,
+    /// for `sim --checkpoint` and `graph_outcomes.py --rule-from`. About the size of
+    /// `checkpoint.run` each.
+    #[arg(long)]
+    pub keep_checkpoints: bool,
     #[command(flatten)]
     pub remote: RemoteArgs,
 }
@@ -309,8 +316,16 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
         }
     };
     let resumed = run.steps() > 0;
-    let mut checkpointer =
-        Checkpointer::new(checkpoint_path.clone(), args.checkpoint_every, &run, notes);
+    let keep_in = args
+        .keep_checkpoints
+        .then(|| args.out.join(KEPT_CHECKPOINTS_DIR));
+    let mut checkpointer = Checkpointer::new(
+        checkpoint_path.clone(),
+        args.checkpoint_every,
+        keep_in,
+        &run,
+        notes,
+    );
     drive(
         &mut run,
         trainer.as_mut(),

@@ -18,6 +18,9 @@ use crate::rl::kernels;
 /// The run checkpoint's file name inside OUT.
 pub const CHECKPOINT_FILE: &str = "checkpoint.run";
 
+/// The folder inside OUT where `--keep-checkpoints` keeps each checkpoint by its step.
+pub const KEPT_CHECKPOINTS_DIR: &str = "checkpoints";
+
 /// What `train` keeps with a run checkpoint beside the run itself.
 #[derive(Debug, Default, Serialize, Deserialize)]
 pub(super) struct ResumeNotes {
@@ -32,16 +35,25 @@ pub(super) struct ResumeNotes {
 pub struct Checkpointer {
     path: PathBuf,
     every: u64,
+    /// Where each checkpoint is also kept by its step (`--keep-checkpoints`), if anywhere.
+    keep_in: Option<PathBuf>,
     next_at: u64,
     notes: ResumeNotes,
     start: Instant,
 }
 
 impl Checkpointer {
-    pub(super) fn new(path: PathBuf, every: u64, run: &EvaluativeRun, notes: ResumeNotes) -> Self {
+    pub(super) fn new(
+        path: PathBuf,
+        every: u64,
+        keep_in: Option<PathBuf>,
+        run: &EvaluativeRun,
+        notes: ResumeNotes,
+    ) -> Self {
         Self {
             path,
             every,
+            keep_in,
             next_at: next_multiple(run.steps(), every),
             notes,
             start: Instant::now(),
@@ -81,9 +93,37 @@ impl Checkpointer {
             &self.path,
             &run.checkpoint(trainer, serde_json::to_value(notes)?),
         )?;
+        if let Some(dir) = &self.keep_in {
+            keep_by_step(&self.path, dir, run.steps())?;
+        }
         self.next_at = next_multiple(run.steps(), self.every);
         Ok(())
     }
+}
+
+/// The name a checkpoint taken at `step` is kept under: zero-padded, so that a folder's listing
+/// is in step order.
+fn kept_checkpoint_name(step: u64) -> String {
+    format!("step-{step:09}.run")
+}
+
+/// Keeps the checkpoint just written at `path` as `dir/step-<step>.run`. A hard link costs no
+/// copy, and the next checkpoint replaces `path` by rename, so the link keeps this one's bytes.
+fn keep_by_step(path: &Path, dir: &Path, step: u64) -> anyhow::Result<()> {
+    fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let kept = dir.join(kept_checkpoint_name(step));
+    // A run stopped between writing a checkpoint and keeping it saves the step again on resume.
+    match fs::remove_file(&kept) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            return Err(e).with_context(|| format!("replacing {}", kept.display()));
+        }
+        _ => {}
+    }
+    if fs::hard_link(path, &kept).is_err() {
+        fs::copy(path, &kept)
+            .with_context(|| format!("keeping {} as {}", path.display(), kept.display()))?;
+    }
+    Ok(())
 }
 
 /// The first multiple of `every` above `step` (`u64::MAX` when `every` is 0).
