@@ -139,6 +139,20 @@ fn sim_writes_every_step_with_its_abstract_state_and_each_episode_ends_once() {
     let (quiet, quiet_csv) = run("0");
     assert_eq!(quiet["noise"]["std"], 0.0);
     assert_ne!(quiet_csv, csv);
+    // Streamed into a partial file that becomes the CSV at the end; a path that cannot be
+    // written is refused when the file is created, before any episode runs.
+    assert!(!dir.path().join("steps.partial").exists());
+    let nowhere = dir.path().join("missing/steps.csv");
+    assert_rejected(
+        &[
+            "sim",
+            "--task",
+            "lunar-lander",
+            "--steps",
+            nowhere.to_str().unwrap(),
+        ],
+        "missing/steps.csv: creating",
+    );
     assert_rejected(
         &["sim", "--task", "lunar-lander", "--noise=-0.1"],
         "noise std -0.1: give a finite number at least 0",

@@ -2,14 +2,13 @@
 //! checkpoint had learnt, summarised as one JSON object, and optionally every step of them as
 //! CSV with the scene graph's abstract state.
 
-use std::fmt::Write as _;
-use std::fs;
+use std::fs::{self, File};
+use std::io::{self, BufWriter, Write as _};
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use clap::Args;
 
-use super::output::write_atomically;
 use super::overrides::parse_pair;
 use crate::guidance::evaluative_run::EvaluativeRun;
 use crate::rl::Sac;
@@ -27,7 +26,8 @@ pub struct SimArgs {
     #[arg(long, default_value = "heuristic")]
     pub policy: SimplePolicy,
     /// Act with the policy a `train` run had learnt: its `checkpoint.run` (a running or stopped
-    /// run's), sampled as in training; the env's version and the scene graph are the run's.
+    /// run's) or one it kept (`train --keep-checkpoints`), sampled as in training; the env's
+    /// version and the scene graph are the run's.
     #[arg(long, value_name = "PATH", conflicts_with_all = ["policy", "options"])]
     pub checkpoint: Option<PathBuf>,
     /// With --checkpoint: act with the mean action (tanh of the mean) instead of sampling.
@@ -79,7 +79,14 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
             (task, options, graph, Some(learner))
         }
     };
-    let mut steps = args.steps.as_ref().map(|_| StepTable::new(graph));
+    // Opened before the episodes run, so that a path that cannot be written is said at once.
+    let mut steps = match &args.steps {
+        None => None,
+        Some(path) => Some(
+            StepTable::create(path, graph)
+                .with_context(|| format!("--steps {}", path.display()))?,
+        ),
+    };
     let mut watch = |seen: StepSeen<'_>| {
         if let Some(table) = steps.as_mut() {
             table.push(&seen);
@@ -104,7 +111,8 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
         &mut watch,
     );
     if let (Some(path), Some(table)) = (&args.steps, steps) {
-        write_atomically(path, table.csv.as_bytes())
+        table
+            .finish(path)
             .with_context(|| format!("--steps {}", path.display()))?;
     }
     println!("{}", serde_json::to_string(&summary)?);
@@ -136,44 +144,86 @@ fn checkpoint_policy(
     Ok((run_task, config.env, config.scene_graph, learner))
 }
 
-/// The steps of `sim --steps`, one CSV row each, built as the episodes run.
+/// The steps of `sim --steps`, one CSV row each, written as the episodes run into
+/// `<path>.partial`, which becomes `path` when they have all run: the file appears whole or not
+/// at all, and thousands of episodes take no more memory than one.
 struct StepTable {
     graph: SceneGraph,
-    csv: String,
+    partial: PathBuf,
+    out: BufWriter<File>,
     /// The header is written on the first step, when the observation's and action's sizes are
     /// known.
     header_written: bool,
+    /// The first write that failed: the episodes run on (a watcher cannot stop them), and
+    /// [`StepTable::finish`] reports it.
+    failed: Option<io::Error>,
 }
 
 impl StepTable {
-    fn new(graph: SceneGraph) -> Self {
-        Self {
+    fn create(path: &Path, graph: SceneGraph) -> anyhow::Result<Self> {
+        let partial = path.with_extension("partial");
+        let file =
+            File::create(&partial).with_context(|| format!("creating {}", partial.display()))?;
+        Ok(Self {
             graph,
-            csv: String::new(),
+            partial,
+            out: BufWriter::new(file),
             header_written: false,
-        }
+            failed: None,
+        })
     }
 
     fn push(&mut self, seen: &StepSeen<'_>) {
+        if self.failed.is_none()
+            && let Err(e) = self.write_row(seen)
+        {
+            self.failed = Some(e);
+        }
+    }
+
+    fn write_row(&mut self, seen: &StepSeen<'_>) -> io::Result<()> {
+        let out = &mut self.out;
         if !self.header_written {
-            self.csv.push_str("seed,t");
-            (0..seen.next_obs.len()).for_each(|i| write!(self.csv, ",obs_{i}").unwrap());
-            (0..seen.action.len()).for_each(|i| write!(self.csv, ",action_{i}").unwrap());
-            self.csv.push_str(",reward,abstract_state,outcome\n");
+            out.write_all(b"seed,t")?;
+            for i in 0..seen.next_obs.len() {
+                write!(out, ",obs_{i}")?;
+            }
+            for i in 0..seen.action.len() {
+                write!(out, ",action_{i}")?;
+            }
+            out.write_all(b",reward,abstract_state,outcome\n")?;
             self.header_written = true;
         }
-        write!(self.csv, "{},{}", seen.seed, seen.t).unwrap();
+        write!(out, "{},{}", seen.seed, seen.t)?;
         for v in seen.next_obs.iter().chain(seen.action) {
-            write!(self.csv, ",{v}").unwrap();
+            write!(out, ",{v}")?;
         }
         let state = self.graph.evaluate(seen.next_obs, seen.action);
         writeln!(
-            self.csv,
+            out,
             ",{},{},{}",
             seen.reward,
             state.to_bit_string(self.graph.dim()),
             seen.outcome.map_or("", |o| o.id())
         )
-        .unwrap();
+    }
+
+    /// Flushes the rows and puts the file in place; on a failed write, removes the partial file
+    /// and says what failed.
+    fn finish(self, path: &Path) -> anyhow::Result<()> {
+        let written = match self.failed {
+            Some(e) => Err(e),
+            None => self
+                .out
+                .into_inner()
+                .map_err(io::IntoInnerError::into_error)
+                .and_then(|file| file.sync_all()),
+        };
+        if let Err(e) = written {
+            let _ = fs::remove_file(&self.partial);
+            return Err(e).with_context(|| format!("writing {}", self.partial.display()));
+        }
+        fs::rename(&self.partial, path)
+            .with_context(|| format!("renaming {} to {}", self.partial.display(), path.display()))
     }
 }
