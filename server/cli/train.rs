@@ -22,9 +22,10 @@ use super::output::publish_summary;
 use super::overrides;
 use super::progress::Progress;
 use super::remote::RemoteArgs;
-pub use super::train_checkpoint::{CHECKPOINT_FILE, KEPT_CHECKPOINTS_DIR};
+pub use super::train_checkpoint::CHECKPOINT_FILE;
 use super::train_checkpoint::{
-    Checkpointer, RECENT_EPISODES, ResumeNotes, keep_episodes, keep_kernels_of, lock_run_dir,
+    Checkpointer, KEPT_CHECKPOINTS_DIR, RECENT_EPISODES, ResumeNotes, keep_episodes,
+    keep_kernels_of, lock_run_dir,
 };
 use crate::guidance::evaluative_run::{EpisodeRecord, EvaluativeRun, EvaluativeRunConfig};
 use crate::guidance::evaluative_trainer::EvaluativeTrainer;

@@ -19,7 +19,7 @@ use crate::rl::kernels;
 pub const CHECKPOINT_FILE: &str = "checkpoint.run";
 
 /// The folder inside OUT where `--keep-checkpoints` keeps each checkpoint by its step.
-pub const KEPT_CHECKPOINTS_DIR: &str = "checkpoints";
+pub(super) const KEPT_CHECKPOINTS_DIR: &str = "checkpoints";
 
 /// What `train` keeps with a run checkpoint beside the run itself.
 #[derive(Debug, Default, Serialize, Deserialize)]
