@@ -32,6 +32,7 @@ mod store;
 mod store_people;
 mod studies;
 mod study_pilot;
+mod train_branch;
 mod train_e2e;
 mod ws_sessions;
 mod ws_undo;

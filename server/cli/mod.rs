@@ -27,6 +27,7 @@ mod sim;
 mod study;
 mod study_server;
 mod train;
+mod train_branch;
 mod train_checkpoint;
 
 use clap::{Parser, Subcommand};

@@ -7,6 +7,7 @@
 //! from there, bit for bit, and the file is removed once `summary.json` is written (the
 //! checkpoint, the folder's lock and what a resume keeps: `train_checkpoint.rs`).
 //! `--keep-checkpoints` also keeps each one under `checkpoints/` by its step, past the run's end.
+//! `--branch-from` begins a run as another run's checkpoint (`train_branch.rs`).
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -22,6 +23,7 @@ use super::output::publish_summary;
 use super::overrides;
 use super::progress::Progress;
 use super::remote::RemoteArgs;
+use super::train_branch::{BranchedFrom, start_branch};
 pub use super::train_checkpoint::CHECKPOINT_FILE;
 use super::train_checkpoint::{
     Checkpointer, KEPT_CHECKPOINTS_DIR, RECENT_EPISODES, ResumeNotes, keep_episodes,
@@ -69,6 +71,14 @@ pub struct TrainArgs {
     /// `checkpoint.run` each.
     #[arg(long)]
     pub keep_checkpoints: bool,
+    /// Begin as another run's checkpoint (one `--keep-checkpoints` kept, or a
+    /// `checkpoint.run`) instead of from step 0: that run to its step, this command's settings
+    /// after. They may differ from that run's only in `feedback_until`, and only where it has
+    /// not acted yet (a cut at or after the checkpoint's step); anything else is refused by
+    /// name. The run's rows up to the checkpoint are copied from its folder into OUT. Once OUT
+    /// holds a checkpoint of its own, the run resumes from that instead.
+    #[arg(long, value_name = "CHECKPOINT")]
+    pub branch_from: Option<PathBuf>,
     #[command(flatten)]
     pub remote: RemoteArgs,
 }
@@ -103,6 +113,9 @@ pub struct TrainSummary {
     /// bits), and the most threads one product used.
     pub kernels: KernelPath,
     pub threads: usize,
+    /// The checkpoint of another run this one began as (`--branch-from`), if any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub branched_from: Option<BranchedFrom>,
     pub config: EvaluativeRunConfig,
 }
 
@@ -240,6 +253,13 @@ pub fn final_performance(episodes: &[EpisodeRecord], n: usize) -> (f64, f64) {
     (mean, successes as f64 / tail.len() as f64)
 }
 
+/// Where a run begins: its own checkpoint, another run's (`--branch-from`), or step 0.
+enum Start {
+    Resume(Vec<u8>),
+    Branch { from: PathBuf, bytes: Vec<u8> },
+    New,
+}
+
 pub fn run(args: TrainArgs) -> anyhow::Result<()> {
     let remote = args.remote.connect(args.task)?;
     let config = match (&remote, args.task) {
@@ -267,16 +287,27 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
     };
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let _only_writer = lock_run_dir(&args.out)?;
-    fs::write(
-        args.out.join("config.json"),
-        serde_json::to_vec_pretty(&config)?,
-    )?;
 
     let label = format!("{task_id} {} seed {}", args.method, args.seed);
     let checkpoint_path = args.out.join(CHECKPOINT_FILE);
-    let saved = fs::read(&checkpoint_path);
-    if let Ok(bytes) = &saved {
-        keep_kernels_of(bytes, &checkpoint_path, &label)?;
+    // The run's own checkpoint first: a branch that has begun goes on from its own.
+    let start = match fs::read(&checkpoint_path) {
+        Ok(bytes) => Start::Resume(bytes),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => match &args.branch_from {
+            Some(from) => Start::Branch {
+                bytes: fs::read(from).with_context(|| format!("reading {}", from.display()))?,
+                from: from.clone(),
+            },
+            None => Start::New,
+        },
+        Err(e) => {
+            return Err(e).with_context(|| format!("reading {}", checkpoint_path.display()));
+        }
+    };
+    match &start {
+        Start::Resume(bytes) => keep_kernels_of(bytes, &checkpoint_path, &label)?,
+        Start::Branch { from, bytes } => keep_kernels_of(bytes, from, &label)?,
+        Start::New => {}
     }
     eprintln!(
         "{label}: {} kernels, {} thread(s)",
@@ -284,8 +315,8 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
         kernels::threads_now()
     );
     let remote_env = remote.map(|env| Box::new(env) as Box<dyn Env>);
-    let (mut run, notes) = match saved {
-        Ok(bytes) => {
+    let (mut run, notes) = match start {
+        Start::Resume(bytes) => {
             let (run, notes) =
                 EvaluativeRun::resume_with_env(&bytes, &config, remote_env, trainer.as_mut())
                     .with_context(|| {
@@ -305,17 +336,35 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
             );
             (run, notes)
         }
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+        Start::Branch { from, bytes } => {
+            let (run, notes) = start_branch(
+                &from,
+                &bytes,
+                &config,
+                remote_env,
+                trainer.as_mut(),
+                &args.out,
+            )?;
+            eprintln!(
+                "{label}: branched from {} at step {}",
+                from.display(),
+                run.steps()
+            );
+            (run, notes)
+        }
+        Start::New => {
             let run = match remote_env {
                 Some(env) => EvaluativeRun::with_env(config.clone(), env, args.steps)?,
                 None => EvaluativeRun::new(config.clone(), args.steps),
             };
             (run, ResumeNotes::default())
         }
-        Err(e) => {
-            return Err(e).with_context(|| format!("reading {}", checkpoint_path.display()));
-        }
     };
+    // Written once the run could begin: a branch refused leaves the folder as it was.
+    fs::write(
+        args.out.join("config.json"),
+        serde_json::to_vec_pretty(&config)?,
+    )?;
     let resumed = run.steps() > 0;
     let keep_in = args
         .keep_checkpoints
@@ -358,6 +407,7 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
         updates_per_second: run.learner().updates() as f64 / wall_seconds,
         kernels: kernels::current_path(),
         threads: kernels::threads_now(),
+        branched_from: checkpointer.branched_from().cloned(),
         config,
     };
     publish_summary(&args.out.join("summary.json"), &summary)?;

@@ -11,6 +11,7 @@ use anyhow::Context;
 use serde::{Deserialize, Serialize};
 
 use super::output::write_atomically;
+use super::train_branch::BranchedFrom;
 use crate::guidance::evaluative_run::{EpisodeRecord, EvaluativeRun};
 use crate::guidance::evaluative_trainer::EvaluativeTrainer;
 use crate::rl::kernels;
@@ -26,8 +27,12 @@ pub(super) const KEPT_CHECKPOINTS_DIR: &str = "checkpoints";
 pub(super) struct ResumeNotes {
     /// The last finished episodes (for the final mean return and success rate).
     pub(super) recent_episodes: Vec<EpisodeRecord>,
-    /// Wall time spent on the run before the checkpoint.
+    /// Wall time spent on the run before the checkpoint (a branch's: with the run it
+    /// branched from, to the branch's step).
     pub(super) wall_seconds: f64,
+    /// Where the run began, if it is a branch of another's (`--branch-from`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) branched_from: Option<BranchedFrom>,
 }
 
 /// Writes the run checkpoint at the first episode start after each multiple of `every` steps
@@ -64,6 +69,11 @@ impl Checkpointer {
         self.notes.wall_seconds + self.start.elapsed().as_secs_f64()
     }
 
+    /// Where the run began, if it is a branch of another's.
+    pub(super) fn branched_from(&self) -> Option<&BranchedFrom> {
+        self.notes.branched_from.as_ref()
+    }
+
     /// The last finished episodes, oldest first.
     pub(super) fn recent_episodes(&self) -> &[EpisodeRecord] {
         &self.notes.recent_episodes
@@ -88,6 +98,7 @@ impl Checkpointer {
         let notes = ResumeNotes {
             recent_episodes: self.notes.recent_episodes.clone(),
             wall_seconds: self.wall_seconds(),
+            branched_from: self.notes.branched_from.clone(),
         };
         write_atomically(
             &self.path,

@@ -475,6 +475,10 @@ pub fn evaluate_policy_on(
 mod run_checkpoint;
 pub use run_checkpoint::RunCheckpointError;
 
+#[path = "run_branch.rs"]
+mod run_branch;
+pub use run_branch::{BranchError, branch_check};
+
 #[path = "run_take_in.rs"]
 mod run_take_in;
 pub use run_take_in::{AskedStep, TakeInError};
