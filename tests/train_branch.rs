@@ -50,6 +50,15 @@ fn a_branch_is_the_run_its_settings_make_from_step_0_row_for_row() {
     // The same settings from nothing, and as a branch of the full run.
     let scratch = ok(&dualrep(&small_lunar_ef100("scratch", &cut), d));
     assert_eq!(scratch["feedback_count"], 800, "the cut acted");
+    // The full run's files as a running run's may be read: a row begun, not yet finished.
+    for file in ["metrics.csv", "learner.csv", "answers.csv"] {
+        use std::io::Write;
+        let mut f = std::fs::OpenOptions::new()
+            .append(true)
+            .open(d.join("full").join(file))
+            .unwrap();
+        f.write_all(b"15").unwrap();
+    }
     let branch_args = small_lunar_ef100("branch", &[cut[0], cut[1], "--branch-from", &from]);
     let out = dualrep(&branch_args, d);
     let branch = ok(&out);

@@ -54,7 +54,7 @@ pub fn keep_episode_rows(path: &Path, header: &str, episodes: u64) -> anyhow::Re
         Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
     };
     let mut keep = vec![header];
-    for line in text.lines().skip(1) {
+    for line in finished_rows(&text).lines().skip(1) {
         let episode: u64 = line
             .split(',')
             .nth(1)
@@ -65,4 +65,10 @@ pub fn keep_episode_rows(path: &Path, header: &str, episodes: u64) -> anyhow::Re
         }
     }
     write_atomically(path, format!("{}\n", keep.join("\n")).as_bytes())
+}
+
+/// `text` up to its last newline: a row still being written when the file was read (a run
+/// stopped mid-row, or a running run's file copied by `--branch-from`) is not a row yet.
+pub fn finished_rows(text: &str) -> &str {
+    text.rfind('\n').map_or("", |end| &text[..=end])
 }

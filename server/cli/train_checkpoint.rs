@@ -10,6 +10,7 @@ use std::time::Instant;
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
 
+use super::episode_file::finished_rows;
 use super::output::write_atomically;
 use super::train_branch::BranchedFrom;
 use crate::guidance::evaluative_run::{EpisodeRecord, EvaluativeRun};
@@ -206,7 +207,10 @@ pub(super) fn lock_run_dir(out: &Path) -> anyhow::Result<Option<File>> {
 /// counts (episodes that finished after it are run again and written again).
 pub(super) fn keep_episodes(path: &Path, episodes: u64) -> anyhow::Result<()> {
     let text = fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let keep: Vec<&str> = text.lines().take(1 + episodes as usize).collect();
+    let keep: Vec<&str> = finished_rows(&text)
+        .lines()
+        .take(1 + episodes as usize)
+        .collect();
     if keep.len() != 1 + episodes as usize {
         anyhow::bail!(
             "{} has {} episode rows, the checkpoint counts {episodes}",
