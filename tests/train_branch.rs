@@ -112,6 +112,39 @@ fn a_branch_is_the_run_its_settings_make_from_step_0_row_for_row() {
     let summary: serde_json::Value = serde_json::from_str(&read(d, "again/summary.json")).unwrap();
     assert_eq!(summary["branched_from"]["step"], step);
 
+    // Given the run's folder, the branch begins at its latest kept checkpoint at or before the
+    // cut, and is the same run.
+    let out = dualrep(
+        &small_lunar_ef100("by-folder", &[cut[0], cut[1], "--branch-from", "full"]),
+        d,
+    );
+    let by_folder = ok(&out);
+    assert!(
+        String::from_utf8_lossy(&out.stderr)
+            .contains(&format!("branched from {from} at step {step}")),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(by_folder["cumulative_return"], scratch["cumulative_return"]);
+    assert_eq!(
+        read(d, "by-folder/metrics.csv"),
+        read(d, "scratch/metrics.csv")
+    );
+    // A cut before every kept checkpoint finds none, and says where it looked.
+    let out = dualrep(
+        &small_lunar_ef100(
+            "none",
+            &["--set", "feedback_until=100", "--branch-from", "full"],
+        ),
+        d,
+    );
+    assert!(!out.status.success());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("no kept checkpoint"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+
     // What a branch may not change, refused by name before a step is run.
     let refused = |out_dir: &str, extra: &[&str], says: &[&str]| {
         let mut extra = extra.to_vec();

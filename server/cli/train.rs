@@ -23,7 +23,7 @@ use super::output::publish_summary;
 use super::overrides;
 use super::progress::Progress;
 use super::remote::RemoteArgs;
-use super::train_branch::{BranchedFrom, start_branch};
+use super::train_branch::{BranchedFrom, branch_checkpoint, start_branch};
 pub use super::train_checkpoint::CHECKPOINT_FILE;
 use super::train_checkpoint::{
     Checkpointer, KEPT_CHECKPOINTS_DIR, RECENT_EPISODES, ResumeNotes, keep_episodes,
@@ -72,8 +72,9 @@ pub struct TrainArgs {
     #[arg(long)]
     pub keep_checkpoints: bool,
     /// Begin as another run's checkpoint (one `--keep-checkpoints` kept, or a
-    /// `checkpoint.run`) instead of from step 0: that run to its step, this command's settings
-    /// after. They may differ from that run's only in `feedback_until`, and only where it has
+    /// `checkpoint.run`; given a folder of kept ones or a run's folder, the latest at or before
+    /// this command's `feedback_until`) instead of from step 0: that run to its step, this
+    /// command's settings after. They may differ from that run's only in `feedback_until`, and only where it has
     /// not acted yet (a cut at or after the checkpoint's step); anything else is refused by
     /// name. The run's rows up to the checkpoint are copied from its folder into OUT. Once OUT
     /// holds a checkpoint of its own, the run resumes from that instead.
@@ -294,10 +295,14 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
     let start = match fs::read(&checkpoint_path) {
         Ok(bytes) => Start::Resume(bytes),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => match &args.branch_from {
-            Some(from) => Start::Branch {
-                bytes: fs::read(from).with_context(|| format!("reading {}", from.display()))?,
-                from: from.clone(),
-            },
+            Some(given) => {
+                let from = branch_checkpoint(given, &config)?;
+                Start::Branch {
+                    bytes: fs::read(&from)
+                        .with_context(|| format!("reading {}", from.display()))?,
+                    from,
+                }
+            }
             None => Start::New,
         },
         Err(e) => {

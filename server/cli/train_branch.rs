@@ -49,6 +49,47 @@ pub(super) fn start_branch(
     Ok((run, notes))
 }
 
+/// The checkpoint `--branch-from` names: the file given, or in a folder of kept checkpoints (or
+/// a run's folder holding one, `checkpoints/`), the latest taken at or before the step from
+/// which `config` stops asking (the latest of all when it asks to the end). Which one is taken
+/// changes only the cost: each is the same run, so the branch is the same from any of them.
+pub(super) fn branch_checkpoint(
+    path: &Path,
+    config: &EvaluativeRunConfig,
+) -> anyhow::Result<PathBuf> {
+    if !path.is_dir() {
+        return Ok(path.to_path_buf());
+    }
+    let dir = match path.join(KEPT_CHECKPOINTS_DIR) {
+        kept if kept.is_dir() => kept,
+        _ => path.to_path_buf(),
+    };
+    let limit = config.feedback_until.unwrap_or(u64::MAX);
+    let mut best: Option<(u64, PathBuf)> = None;
+    for entry in fs::read_dir(&dir).with_context(|| format!("reading {}", dir.display()))? {
+        let file = entry?.path();
+        let step = file
+            .file_name()
+            .and_then(|n| n.to_str())
+            .and_then(|n| n.strip_prefix("step-")?.strip_suffix(".run"))
+            .and_then(|n| n.parse::<u64>().ok());
+        if let Some(step) = step.filter(|&s| s <= limit)
+            && best.as_ref().is_none_or(|(b, _)| step > *b)
+        {
+            best = Some((step, file));
+        }
+    }
+    best.map(|(_, file)| file).with_context(|| {
+        format!(
+            "--branch-from: no kept checkpoint (step-<N>.run) in {} at or before step {}",
+            dir.display(),
+            config
+                .feedback_until
+                .map_or_else(|| "(any)".into(), |n| n.to_string())
+        )
+    })
+}
+
 /// The folder of the run a checkpoint is of: beside `checkpoint.run`, or above the
 /// `checkpoints/` folder `--keep-checkpoints` keeps them in.
 fn source_folder(checkpoint: &Path) -> PathBuf {
