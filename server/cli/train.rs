@@ -74,10 +74,10 @@ pub struct TrainArgs {
     /// Begin as another run's checkpoint (one `--keep-checkpoints` kept, or a
     /// `checkpoint.run`; given a folder of kept ones or a run's folder, the latest at or before
     /// this command's `feedback_until`) instead of from step 0: that run to its step, this
-    /// command's settings after. They may differ from that run's only in `feedback_until`, and only where it has
-    /// not acted yet (a cut at or after the checkpoint's step); anything else is refused by
-    /// name. The run's rows up to the checkpoint are copied from its folder into OUT. Once OUT
-    /// holds a checkpoint of its own, the run resumes from that instead.
+    /// command's settings after. They may differ from that run's only in `feedback_until`, and
+    /// only where it has not acted yet (a cut at or after the checkpoint's step); anything else
+    /// is refused by name. The run's rows up to the checkpoint are copied from its folder into
+    /// OUT. Once OUT holds a checkpoint of its own, the run resumes from that instead.
     #[arg(long, value_name = "CHECKPOINT")]
     pub branch_from: Option<PathBuf>,
     #[command(flatten)]
@@ -261,6 +261,30 @@ enum Start {
     New,
 }
 
+impl Start {
+    /// The run's own checkpoint first (a branch that has begun goes on from its own), then the
+    /// one `--branch-from` names, else step 0.
+    fn choose(
+        own: &Path,
+        branch_from: Option<&Path>,
+        config: &EvaluativeRunConfig,
+    ) -> anyhow::Result<Self> {
+        match fs::read(own) {
+            Ok(bytes) => Ok(Self::Resume(bytes)),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => match branch_from {
+                Some(given) => {
+                    let from = branch_checkpoint(given, config)?;
+                    let bytes =
+                        fs::read(&from).with_context(|| format!("reading {}", from.display()))?;
+                    Ok(Self::Branch { from, bytes })
+                }
+                None => Ok(Self::New),
+            },
+            Err(e) => Err(e).with_context(|| format!("reading {}", own.display())),
+        }
+    }
+}
+
 pub fn run(args: TrainArgs) -> anyhow::Result<()> {
     let remote = args.remote.connect(args.task)?;
     let config = match (&remote, args.task) {
@@ -291,24 +315,7 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
 
     let label = format!("{task_id} {} seed {}", args.method, args.seed);
     let checkpoint_path = args.out.join(CHECKPOINT_FILE);
-    // The run's own checkpoint first: a branch that has begun goes on from its own.
-    let start = match fs::read(&checkpoint_path) {
-        Ok(bytes) => Start::Resume(bytes),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => match &args.branch_from {
-            Some(given) => {
-                let from = branch_checkpoint(given, &config)?;
-                Start::Branch {
-                    bytes: fs::read(&from)
-                        .with_context(|| format!("reading {}", from.display()))?,
-                    from,
-                }
-            }
-            None => Start::New,
-        },
-        Err(e) => {
-            return Err(e).with_context(|| format!("reading {}", checkpoint_path.display()));
-        }
-    };
+    let start = Start::choose(&checkpoint_path, args.branch_from.as_deref(), &config)?;
     match &start {
         Start::Resume(bytes) => keep_kernels_of(bytes, &checkpoint_path, &label)?,
         Start::Branch { from, bytes } => keep_kernels_of(bytes, from, &label)?,
