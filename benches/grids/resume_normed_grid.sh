@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Starts (or resumes) the normed learner's Lunar Lander grid on this machine, from the repository
+# alone if need be: the queue of lunar_layer_norm_queue.py (the rows, each seed's cuts at 60k
+# after its pair, then SAC alone normed) run by local_runs.sh, two at a time, from a copy of the
+# release binary outside target/. Runs already in docs/results are skipped; runs stopped midway
+# resume from their checkpoints under the grid folder's scratch/, if it survived.
+#
+#   bash benches/grids/resume_normed_grid.sh [GRID]      # GRID: /work/grid by default
+#
+# The binary must know `train --branch-from FOLDER` (eaa0da9c or later; training unchanged since
+# cab5e144): the newest in GRID/bin that does is used, else one is built and copied there.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+grid=${1:-/work/grid}
+if pgrep -f 'local_runs.sh' > /dev/null; then
+  echo "a grid runner is already running:" >&2
+  pgrep -af 'local_runs.sh' >&2
+  exit 1
+fi
+mkdir -p "$grid/bin" "$grid/scratch"
+bin=""
+for candidate in $(ls -t "$grid"/bin/dualrep-* 2> /dev/null); do
+  if "$candidate" train --help | grep -q 'given a folder of kept ones'; then
+    bin=$candidate
+    break
+  fi
+done
+if [ -z "$bin" ]; then
+  cargo build --release
+  bin="$grid/bin/dualrep-$(git rev-parse --short=8 HEAD)"
+  cp target/release/dualrep "$bin"
+fi
+python3 benches/grids/lunar_layer_norm_queue.py > "$grid/ln-queue.jobs"
+nohup setsid bash benches/grids/local_runs.sh "$bin" "$grid/ln-queue.jobs" "$grid/scratch" \
+  docs/results 2 >> "$grid/ln-rows.log" 2>&1 < /dev/null &
+echo "started: $bin on $grid/ln-queue.jobs ($(grep -cv '^\s*\(#\|$\)' "$grid/ln-queue.jobs") lines); log $grid/ln-rows.log"
