@@ -172,6 +172,17 @@ fn a_branch_is_the_run_its_settings_make_from_step_0_row_for_row() {
         &["only feedback_until may differ", "reward_scale"],
     );
     refused("other-seed", &["--seed", "1"], &["seed"]);
+    // A longer run keeps more replay rows than the run did, so it would not be that run.
+    let mut longer = small_lunar_ef100("longer", &[cut[0], cut[1], "--branch-from", &from]);
+    let at = longer.iter().position(|a| *a == "1500").unwrap();
+    longer[at] = "1600";
+    let out = dualrep(&longer, d);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("holds 1500 rows") && stderr.contains("1600"),
+        "{stderr}"
+    );
     // Into the folder of the run it is a checkpoint of: that run's rows are left as they were.
     let metrics = read(d, "full/metrics.csv");
     let out = dualrep(

@@ -353,6 +353,7 @@ pub fn run(args: TrainArgs) -> anyhow::Result<()> {
                 &from,
                 &bytes,
                 &config,
+                args.steps,
                 remote_env,
                 trainer.as_mut(),
                 &args.out,

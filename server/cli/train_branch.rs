@@ -27,16 +27,18 @@ pub struct BranchedFrom {
     pub episodes: u64,
 }
 
-/// The branch at `from`'s step under `config`, its folder `out` given the other run's rows.
+/// The branch at `from`'s step under `config`, to `steps`, its folder `out` given the other
+/// run's rows.
 pub(super) fn start_branch(
     from: &Path,
     bytes: &[u8],
     config: &EvaluativeRunConfig,
+    steps: u64,
     env: Option<Box<dyn Env>>,
     trainer: &mut dyn EvaluativeTrainer,
     out: &Path,
 ) -> anyhow::Result<(EvaluativeRun, ResumeNotes)> {
-    let (run, notes) = EvaluativeRun::branch(bytes, config, env, trainer)
+    let (run, notes) = EvaluativeRun::branch(bytes, config, steps, env, trainer)
         .with_context(|| format!("branching from {}", from.display()))?;
     let mut notes: ResumeNotes = serde_json::from_value(notes)
         .with_context(|| format!("reading the notes in {}", from.display()))?;

@@ -135,8 +135,7 @@ impl EvaluativeRun {
             env.spec().action_space.dim(),
         );
         let learner = Sac::new(obs_dim, act_dim, config.sac.clone(), config.seed);
-        let capacity = (config.sac.buffer_size as u64).min(steps.max(1)) as usize;
-        let replay = ReplayBuffer::new(capacity, obs_dim, act_dim);
+        let replay = ReplayBuffer::new(replay_capacity(&config, steps), obs_dim, act_dim);
         let schedule = FeedbackSchedule::new(config.method, config.query_rule.build(), config.seed);
         let mut episode_seeds = ChaCha8Rng::seed_from_u64(config.seed ^ 0xe915_0de5_eed5_0000);
         let episode_seed = episode_seeds.random();
@@ -469,6 +468,11 @@ pub fn evaluate_policy_on(
     }
     let n = f64::from(episodes.max(1));
     Ok((total / n, f64::from(successes) / n))
+}
+
+/// The rows a run of `steps` steps keeps in its replay: all of them, up to the buffer's size.
+fn replay_capacity(config: &EvaluativeRunConfig, steps: u64) -> usize {
+    (config.sac.buffer_size as u64).min(steps.max(1)) as usize
 }
 
 #[path = "run_checkpoint.rs"]

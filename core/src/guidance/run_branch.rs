@@ -33,6 +33,16 @@ pub enum BranchError {
         was: Option<u64>,
         now: Option<u64>,
     },
+    /// A run of the branch's length would keep another number of replay rows than the run
+    /// did (the replay holds every step, up to `buffer_size`).
+    #[error(
+        "branch: the run's replay holds {kept} rows; a run of {steps} steps would hold {would}, so the branch would not be that run (give the run's own number of steps)"
+    )]
+    OtherLength {
+        steps: u64,
+        kept: usize,
+        would: usize,
+    },
 }
 
 fn show_until(until: Option<u64>) -> String {
@@ -40,19 +50,24 @@ fn show_until(until: Option<u64>) -> String {
 }
 
 impl EvaluativeRun {
-    /// The run `bytes` is a checkpoint of, going on under `config` from its step (on `env`
-    /// when given, as [`EvaluativeRun::resume_with_env`]), with `trainer` put back to its state
-    /// then, and the caller's notes. `config` may differ from the run's own only as
-    /// [`branch_check`] allows.
+    /// The run `bytes` is a checkpoint of, going on under `config` from its step to `steps`
+    /// (on `env` when given, as [`EvaluativeRun::resume_with_env`]), with `trainer` put back to
+    /// its state then, and the caller's notes. `config` may differ from the run's own only as
+    /// [`branch_check`] allows, and `steps` must give the replay the run's size.
     pub fn branch(
         bytes: &[u8],
         config: &EvaluativeRunConfig,
+        steps: u64,
         env: Option<Box<dyn Env>>,
         trainer: &mut dyn EvaluativeTrainer,
     ) -> Result<(Self, serde_json::Value), BranchError> {
         let (was, _, step) = Self::checkpoint_learner(bytes)?;
         branch_check(&was, config, step)?;
         let (mut run, notes) = Self::resume_with_env(bytes, &was, env, trainer)?;
+        let (kept, would) = (run.replay.capacity(), super::replay_capacity(config, steps));
+        if kept != would {
+            return Err(BranchError::OtherLength { steps, kept, would });
+        }
         run.config = config.clone();
         Ok((run, notes))
     }
