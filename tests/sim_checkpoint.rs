@@ -152,3 +152,82 @@ fn a_finished_run_keeps_each_checkpoint_by_its_step() {
     ));
     assert_eq!(rolled["policy"], "learned");
 }
+
+#[test]
+fn judge_sets_the_runs_critic_beside_its_teacher_on_each_step() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // An EF-100 run learns a human critic from an answer on every step.
+    let mut args = small_lunar_sac("1200", "300", "ef");
+    args[4] = "ef-100";
+    args.push("--keep-checkpoints");
+    ok(&dualrep(&args, d));
+    let mut kept: Vec<String> = std::fs::read_dir(d.join("ef/checkpoints"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    kept.sort();
+    let last = format!("ef/checkpoints/{}", kept.last().unwrap());
+    let sim = ok(&dualrep(
+        &[
+            "sim",
+            "--checkpoint",
+            &last,
+            "--episodes",
+            "3",
+            "--judge",
+            "--steps",
+            "steps.csv",
+        ],
+        d,
+    ));
+    let judge = &sim["judge"];
+    let count = |key: &str| judge[key].as_u64().unwrap();
+    let steps = count("steps");
+    assert_eq!(
+        steps as f64,
+        3.0 * sim["mean_length"].as_f64().unwrap(),
+        "every step judged"
+    );
+    assert_eq!(count("good") + count("bad") + count("none"), steps);
+    assert!(count("good") > 0 && count("bad") > 0, "{judge}");
+    // The steps' rows say the same, counted apart from the summary.
+    let table = std::fs::read_to_string(d.join("steps.csv")).unwrap();
+    let mut lines = table.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(&header[header.len() - 2..], ["h_hat", "answer"]);
+    let (mut good, mut bad, mut agree) = (0, 0, 0);
+    for line in lines {
+        let cells: Vec<&str> = line.split(',').collect();
+        let h_hat: f32 = cells[cells.len() - 2].parse().unwrap();
+        match cells[cells.len() - 1] {
+            "1" => (good, agree) = (good + 1, agree + usize::from(h_hat > 0.0)),
+            "-1" => (bad, agree) = (bad + 1, agree + usize::from(h_hat < 0.0)),
+            "0" => {}
+            other => panic!("answer {other:?}"),
+        }
+    }
+    assert_eq!((good, bad), (count("good") as usize, count("bad") as usize));
+    let agreement = judge["sign_agreement"].as_f64().unwrap();
+    assert!((agreement - agree as f64 / (good + bad) as f64).abs() < 1e-12);
+    let auc = judge["auc_good_over_bad"].as_f64().unwrap();
+    assert!((0.0..=1.0).contains(&auc), "{auc}");
+
+    // A run without answers has no critic to judge.
+    let mut sac = small_lunar_sac("400", "200", "sac-kept");
+    sac.push("--keep-checkpoints");
+    ok(&dualrep(&sac, d));
+    let first = std::fs::read_dir(d.join("sac-kept/checkpoints"))
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    let out = dualrep(
+        &["sim", "--checkpoint", first.to_str().unwrap(), "--judge"],
+        d,
+    );
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("no human critic"), "{stderr}");
+}

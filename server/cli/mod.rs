@@ -24,6 +24,7 @@ pub mod serve;
 #[cfg(test)]
 mod settings_reach;
 mod sim;
+mod sim_judge;
 mod study;
 mod study_server;
 mod train;

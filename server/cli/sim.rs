@@ -1,6 +1,7 @@
 //! `dualrep sim`: episodes of a random or heuristic policy, or of the policy a `train` run's
 //! checkpoint had learnt, summarised as one JSON object, and optionally every step of them as
-//! CSV with the scene graph's abstract state.
+//! CSV with the scene graph's abstract state (and, `--judge`, the run's H_hat beside its
+//! teacher's answer: `sim_judge.rs`).
 
 use std::fs::{self, File};
 use std::io::{self, BufWriter, Write as _};
@@ -10,12 +11,14 @@ use anyhow::{Context, bail};
 use clap::Args;
 
 use super::overrides::parse_pair;
-use crate::guidance::evaluative_run::EvaluativeRun;
+use super::sim_judge::Judge;
+use crate::guidance::evaluative_run::{EvaluativeRun, EvaluativeRunConfig};
+use crate::guidance::evaluative_trainer::Evaluation;
 use crate::rl::Sac;
 use crate::scene_graph::SceneGraph;
 use crate::settings::Settings;
 use crate::sim::rollout::{ActionNoise, Actor, SimplePolicy, StepSeen, run_episodes_watched};
-use crate::sim::{EnvOptions, Task, TaskRef};
+use crate::sim::{Task, TaskRef};
 
 #[derive(Debug, Args)]
 pub struct SimArgs {
@@ -33,6 +36,12 @@ pub struct SimArgs {
     /// With --checkpoint: act with the mean action (tanh of the mean) instead of sampling.
     #[arg(long, requires = "checkpoint")]
     pub deterministic: bool,
+    /// With --checkpoint: beside each step, the run's human critic H_hat(s, a) and the answer its
+    /// synthetic teacher (the task's shipped expert as the run's oracle, without faults, at the
+    /// checkpoint's step) would give there. The summary says how well the one stands in for the
+    /// other (`judge`); `--steps` gains the columns `h_hat` and `answer` (+1, 0, -1).
+    #[arg(long, requires = "checkpoint")]
+    pub judge: bool,
     /// Number of episodes (seeds seed, seed + 1, ...).
     #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
     pub episodes: u32,
@@ -64,6 +73,7 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
     }
     .check()
     .context("--noise, --noise-correlation")?;
+    let mut judge = None;
     let (task, options, graph, mut learned) = match &args.checkpoint {
         None => {
             let task = args
@@ -75,21 +85,31 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
             (task, options, SceneGraph::for_task(task), None)
         }
         Some(path) => {
-            let (task, options, graph, learner) = checkpoint_policy(path, args.task)?;
-            (task, options, graph, Some(learner))
+            let bytes =
+                fs::read(path).with_context(|| format!("--checkpoint {}", path.display()))?;
+            let (task, config, learner, step) = checkpoint_policy(&bytes, path, args.task)?;
+            if args.judge {
+                // The critic is the learner's own, judged apart from the copy that acts.
+                let (_, critic, _) = EvaluativeRun::checkpoint_learner(&bytes)?;
+                let expert = crate::session::load_task_expert(None, task)?;
+                let act_dim = config.make_env().spec().action_space.dim();
+                judge = Some(Judge::new(&config, critic, expert, step, act_dim)?);
+            }
+            (task, config.env, config.scene_graph, Some(learner))
         }
     };
     // Opened before the episodes run, so that a path that cannot be written is said at once.
     let mut steps = match &args.steps {
         None => None,
         Some(path) => Some(
-            StepTable::create(path, graph)
+            StepTable::create(path, graph, judge.is_some())
                 .with_context(|| format!("--steps {}", path.display()))?,
         ),
     };
     let mut watch = |seen: StepSeen<'_>| {
+        let judged = judge.as_mut().map(|j| j.judge(&seen));
         if let Some(table) = steps.as_mut() {
-            table.push(&seen);
+            table.push(&seen, judged);
         }
     };
     let deterministic = args.deterministic;
@@ -115,18 +135,22 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
             .finish(path)
             .with_context(|| format!("--steps {}", path.display()))?;
     }
+    let mut summary = serde_json::to_value(&summary)?;
+    if let Some(judge) = &judge {
+        summary["judge"] = serde_json::to_value(judge.summary())?;
+    }
     println!("{}", serde_json::to_string(&summary)?);
     Ok(())
 }
 
-/// The task, env version, scene graph and learner of a `train` run's checkpoint at `path`;
-/// `task`, if given, must be the run's.
+/// The task, config, learner and step of the `train` run's checkpoint `bytes` (read from
+/// `path`); `task`, if given, must be the run's.
 fn checkpoint_policy(
+    bytes: &[u8],
     path: &Path,
     task: Option<Task>,
-) -> anyhow::Result<(Task, EnvOptions, SceneGraph, Sac)> {
-    let bytes = fs::read(path).with_context(|| format!("--checkpoint {}", path.display()))?;
-    let (config, learner, steps) = EvaluativeRun::checkpoint_learner(&bytes)
+) -> anyhow::Result<(Task, EvaluativeRunConfig, Sac, u64)> {
+    let (config, learner, steps) = EvaluativeRun::checkpoint_learner(bytes)
         .with_context(|| format!("--checkpoint {}", path.display()))?;
     let TaskRef::Builtin(run_task) = config.task else {
         bail!(
@@ -141,7 +165,7 @@ fn checkpoint_policy(
         );
     }
     eprintln!("sim: the policy of {} after {steps} steps", path.display());
-    Ok((run_task, config.env, config.scene_graph, learner))
+    Ok((run_task, config, learner, steps))
 }
 
 /// The steps of `sim --steps`, one CSV row each, written as the episodes run into
@@ -149,6 +173,8 @@ fn checkpoint_policy(
 /// at all, and thousands of episodes take no more memory than one.
 struct StepTable {
     graph: SceneGraph,
+    /// Whether each row ends with the judge's `h_hat` and `answer`.
+    judged: bool,
     partial: PathBuf,
     out: BufWriter<File>,
     /// The header is written on the first step, when the observation's and action's sizes are
@@ -160,12 +186,13 @@ struct StepTable {
 }
 
 impl StepTable {
-    fn create(path: &Path, graph: SceneGraph) -> anyhow::Result<Self> {
+    fn create(path: &Path, graph: SceneGraph, judged: bool) -> anyhow::Result<Self> {
         let partial = path.with_extension("partial");
         let file =
             File::create(&partial).with_context(|| format!("creating {}", partial.display()))?;
         Ok(Self {
             graph,
+            judged,
             partial,
             out: BufWriter::new(file),
             header_written: false,
@@ -173,15 +200,19 @@ impl StepTable {
         })
     }
 
-    fn push(&mut self, seen: &StepSeen<'_>) {
+    fn push(&mut self, seen: &StepSeen<'_>, judged: Option<(f32, Evaluation)>) {
         if self.failed.is_none()
-            && let Err(e) = self.write_row(seen)
+            && let Err(e) = self.write_row(seen, judged)
         {
             self.failed = Some(e);
         }
     }
 
-    fn write_row(&mut self, seen: &StepSeen<'_>) -> io::Result<()> {
+    fn write_row(
+        &mut self,
+        seen: &StepSeen<'_>,
+        judged: Option<(f32, Evaluation)>,
+    ) -> io::Result<()> {
         let out = &mut self.out;
         if !self.header_written {
             out.write_all(b"seed,t")?;
@@ -191,7 +222,12 @@ impl StepTable {
             for i in 0..seen.action.len() {
                 write!(out, ",action_{i}")?;
             }
-            out.write_all(b",reward,abstract_state,outcome\n")?;
+            out.write_all(b",reward,abstract_state,outcome")?;
+            out.write_all(if self.judged {
+                b",h_hat,answer\n"
+            } else {
+                b"\n"
+            })?;
             self.header_written = true;
         }
         write!(out, "{},{}", seen.seed, seen.t)?;
@@ -199,13 +235,17 @@ impl StepTable {
             write!(out, ",{v}")?;
         }
         let state = self.graph.evaluate(seen.next_obs, seen.action);
-        writeln!(
+        write!(
             out,
             ",{},{},{}",
             seen.reward,
             state.to_bit_string(self.graph.dim()),
             seen.outcome.map_or("", |o| o.id())
-        )
+        )?;
+        match judged {
+            Some((h_hat, answer)) => writeln!(out, ",{h_hat},{}", answer.value()),
+            None => writeln!(out),
+        }
     }
 
     /// Flushes the rows and puts the file in place; on a failed write, removes the partial file

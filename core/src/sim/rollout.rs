@@ -145,6 +145,8 @@ pub struct StepSeen<'a> {
     pub seed: u64,
     /// The step's index in its episode, from 0.
     pub t: u32,
+    /// The observation the action was chosen on.
+    pub obs: &'a [f32],
     pub action: &'a [f32],
     pub next_obs: &'a [f32],
     pub reward: f32,
@@ -194,6 +196,7 @@ pub fn run_episode_watched(
         watch(StepSeen {
             seed,
             t: length,
+            obs: &obs,
             action: &action,
             next_obs: &step.obs,
             reward: step.reward,

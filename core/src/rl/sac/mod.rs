@@ -243,6 +243,11 @@ impl Sac {
         min_of_twins(&mut self.eval_ws, [q1, q2], obs, action)
     }
 
+    /// Whether the learner has a human critic (a run that learns from answers).
+    pub fn has_human_critic(&self) -> bool {
+        self.human_critic.is_some()
+    }
+
     /// `min_j H_j(s, a)`, DREF's H_hat (0.0 without a human critic).
     pub fn human_estimate(&mut self, obs: &[f32], action: &[f32]) -> f32 {
         match &self.human_critic {
