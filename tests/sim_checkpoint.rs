@@ -213,6 +213,31 @@ fn judge_sets_the_runs_critic_beside_its_teacher_on_each_step() {
     let auc = judge["auc_good_over_bad"].as_f64().unwrap();
     assert!((0.0..=1.0).contains(&auc), "{auc}");
 
+    // Another run's critic on the same steps: the same steps, other judgements of them.
+    let first = format!("ef/checkpoints/{}", kept[0]);
+    let other = ok(&dualrep(
+        &[
+            "sim",
+            "--checkpoint",
+            &last,
+            "--episodes",
+            "3",
+            "--judge",
+            "--critic-from",
+            &first,
+        ],
+        d,
+    ));
+    assert_eq!(other["judge"]["steps"], judge["steps"]);
+    assert_eq!(
+        other["judge"]["good"], judge["good"],
+        "the same teacher's answers"
+    );
+    assert_ne!(
+        other["judge"]["h_hat_mean_good"], judge["h_hat_mean_good"],
+        "another critic"
+    );
+
     // A run without answers has no critic to judge.
     let mut sac = small_lunar_sac("400", "200", "sac-kept");
     sac.push("--keep-checkpoints");

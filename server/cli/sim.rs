@@ -42,6 +42,11 @@ pub struct SimArgs {
     /// other (`judge`); `--steps` gains the columns `h_hat` and `answer` (+1, 0, -1).
     #[arg(long, requires = "checkpoint")]
     pub judge: bool,
+    /// With --judge: the human critic of another checkpoint of the same task, on the steps of
+    /// --checkpoint's policy and beside the same teacher (--checkpoint's run's, at its step):
+    /// two runs' critics on the same steps.
+    #[arg(long, value_name = "PATH", requires = "judge")]
+    pub critic_from: Option<PathBuf>,
     /// Number of episodes (seeds seed, seed + 1, ...).
     #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
     pub episodes: u32,
@@ -88,9 +93,23 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
             let bytes =
                 fs::read(path).with_context(|| format!("--checkpoint {}", path.display()))?;
             let (task, config, learner, step) = checkpoint_policy(&bytes, path, args.task)?;
+            eprintln!("sim: the policy of {} after {step} steps", path.display());
             if args.judge {
-                // The critic is the learner's own, judged apart from the copy that acts.
-                let (_, critic, _) = EvaluativeRun::checkpoint_learner(&bytes)?;
+                // The critic is the learner's own (or --critic-from's), apart from the copy
+                // that acts; the teacher is this run's, at its step.
+                let critic = match &args.critic_from {
+                    None => EvaluativeRun::checkpoint_learner(&bytes)?.1,
+                    Some(other) => {
+                        let bytes = fs::read(other)
+                            .with_context(|| format!("--critic-from {}", other.display()))?;
+                        let (_, _, critic, at) = checkpoint_policy(&bytes, other, Some(task))?;
+                        eprintln!(
+                            "sim: judged by the critic of {} after {at} steps",
+                            other.display()
+                        );
+                        critic
+                    }
+                };
                 let expert = crate::session::load_task_expert(None, task)?;
                 let act_dim = config.make_env().spec().action_space.dim();
                 judge = Some(Judge::new(&config, critic, expert, step, act_dim)?);
@@ -164,7 +183,6 @@ fn checkpoint_policy(
             path.display()
         );
     }
-    eprintln!("sim: the policy of {} after {steps} steps", path.display());
     Ok((run_task, config, learner, steps))
 }
 

@@ -45,8 +45,9 @@ pub(super) struct JudgeSummary {
 }
 
 impl Judge {
-    /// The judge of a run with `config`, its learner `critic` at `step`, and the task's
-    /// `expert`. `Err`: the run's learner has no human critic.
+    /// The judge of the steps of a run with `config` at `step` (the teacher: the task's
+    /// `expert` as that run's oracle), by the human critic of `critic`, that run's learner or
+    /// another's. `Err`: `critic` has no human critic.
     pub(super) fn new(
         config: &EvaluativeRunConfig,
         critic: Sac,
@@ -56,8 +57,8 @@ impl Judge {
     ) -> anyhow::Result<Self> {
         if !critic.has_human_critic() {
             anyhow::bail!(
-                "--judge: the run's learner has no human critic (method {}); only a run that \
-                 learns from answers has an H_hat to judge",
+                "--judge: the critic's learner has no human critic; only a run that learns from \
+                 answers has an H_hat to judge (this run's method: {})",
                 config.method
             );
         }
