@@ -168,19 +168,13 @@ fn judge_sets_the_runs_critic_beside_its_teacher_on_each_step() {
         .collect();
     kept.sort();
     let last = format!("ef/checkpoints/{}", kept.last().unwrap());
-    let sim = ok(&dualrep(
-        &[
-            "sim",
-            "--checkpoint",
-            &last,
-            "--episodes",
-            "3",
-            "--judge",
-            "--steps",
-            "steps.csv",
-        ],
-        d,
-    ));
+    // Three episodes of the last checkpoint's policy, judged, with `extra` arguments.
+    let judged = |extra: &[&str]| {
+        let mut args = vec!["sim", "--checkpoint", &last, "--episodes", "3", "--judge"];
+        args.extend(extra);
+        ok(&dualrep(&args, d))
+    };
+    let sim = judged(&["--steps", "steps.csv"]);
     let judge = &sim["judge"];
     let count = |key: &str| judge[key].as_u64().unwrap();
     let steps = count("steps");
@@ -215,19 +209,7 @@ fn judge_sets_the_runs_critic_beside_its_teacher_on_each_step() {
 
     // Another run's critic on the same steps: the same steps, other judgements of them.
     let first = format!("ef/checkpoints/{}", kept[0]);
-    let other = ok(&dualrep(
-        &[
-            "sim",
-            "--checkpoint",
-            &last,
-            "--episodes",
-            "3",
-            "--judge",
-            "--critic-from",
-            &first,
-        ],
-        d,
-    ));
+    let other = judged(&["--critic-from", &first]);
     assert_eq!(other["judge"]["steps"], judge["steps"]);
     assert_eq!(
         other["judge"]["good"], judge["good"],
