@@ -210,6 +210,21 @@ fn judge_sets_the_runs_critic_beside_its_teacher_on_each_step() {
     // Another run's critic on the same steps: the same steps, other judgements of them.
     let first = format!("ef/checkpoints/{}", kept[0]);
     let other = judged(&["--critic-from", &first]);
+    assert!(
+        judge.get("within_state_rank_correlation").is_none(),
+        "off by default"
+    );
+    // Actions around each step's, ranked by the critic and by the teacher's critic.
+    let around = judged(&["--judge-actions", "4"]);
+    let rho = around["judge"]["within_state_rank_correlation"]
+        .as_f64()
+        .unwrap();
+    assert!((-1.0..=1.0).contains(&rho), "{rho}");
+    assert!(around["judge"]["within_state_steps"].as_u64().unwrap() > 0);
+    assert_eq!(
+        around["judge"]["good"], judge["good"],
+        "the same steps and answers"
+    );
     assert_eq!(other["judge"]["steps"], judge["steps"]);
     assert_eq!(
         other["judge"]["good"], judge["good"],

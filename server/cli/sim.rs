@@ -47,6 +47,11 @@ pub struct SimArgs {
     /// two runs' critics on the same steps.
     #[arg(long, value_name = "PATH", requires = "judge")]
     pub critic_from: Option<PathBuf>,
+    /// With --judge: also K actions around each step's (Gaussian, sd 0.3, clipped), ranked by
+    /// the critic's H_hat and by the teacher's expert's Q; the summary's
+    /// `within_state_rank_correlation` is their mean Spearman's rho over the steps (0: off).
+    #[arg(long, value_name = "K", default_value_t = 0, requires = "judge")]
+    pub judge_actions: usize,
     /// Number of episodes (seeds seed, seed + 1, ...).
     #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
     pub episodes: u32,
@@ -112,7 +117,12 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
                 };
                 let expert = crate::session::load_task_expert(None, task)?;
                 let act_dim = config.make_env().spec().action_space.dim();
-                judge = Some(Judge::new(&config, critic, expert, step, act_dim)?);
+                let mut judged = Judge::new(&config, critic, expert, step, act_dim)?;
+                if args.judge_actions > 0 {
+                    let expert = crate::session::load_task_expert(None, task)?;
+                    judged = judged.with_actions_around(expert, args.judge_actions, args.seed);
+                }
+                judge = Some(judged);
             }
             (task, config.env, config.scene_graph, Some(learner))
         }

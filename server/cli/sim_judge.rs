@@ -4,6 +4,9 @@
 //! that reads H_hat everywhere (`mix = authors`) learns from the critic instead of the teacher:
 //! how well the one stands in for the other on the policy's own steps is what this measures.
 
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 
 use crate::guidance::evaluative_run::EvaluativeRunConfig;
@@ -24,6 +27,22 @@ pub(super) struct Judge {
     action_scale: f32,
     shown_action: Vec<f32>,
     judged: Vec<(f32, Evaluation)>,
+    /// Actions around each step's, ranked by H_hat and by the expert's Q (`--judge-actions`).
+    around: Option<AroundActions>,
+}
+
+/// Other actions in each state: does H_hat order them as the teacher's critic does? The actor
+/// follows H_hat's ranking of actions within a state, which an AUC over steps mixes with the
+/// ranking across states.
+struct AroundActions {
+    /// The teacher's critic (a copy of the expert the oracle consults).
+    expert: Sac,
+    count: usize,
+    noise: Normal<f32>,
+    rng: ChaCha8Rng,
+    /// Per step, Spearman's rho between H_hat and the expert's Q over the step's action and
+    /// `count` others (steps where either is constant are left out).
+    rhos: Vec<f64>,
 }
 
 /// The judge's account in `sim`'s summary.
@@ -42,6 +61,13 @@ pub(super) struct JudgeSummary {
     /// P(H_hat on a +1 step > H_hat on a -1 step), ties half: 0.5 is a critic that cannot tell
     /// them apart, 1 one that always can.
     pub auc_good_over_bad: f64,
+    /// With `--judge-actions K`: the mean over steps of Spearman's rho between H_hat and the
+    /// expert's Q on the step's action and K others around it (Gaussian, sd 0.3, clipped): 1 is
+    /// a critic that orders a state's actions as the teacher's critic does.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub within_state_rank_correlation: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub within_state_steps: Option<usize>,
 }
 
 impl Judge {
@@ -70,7 +96,21 @@ impl Judge {
             action_scale: config.oracle.action_scale,
             shown_action: vec![0.0; act_dim],
             judged: Vec::new(),
+            around: None,
         })
+    }
+
+    /// Also rank `count` actions around each step's by H_hat and by `expert`'s Q (a copy of the
+    /// teacher's expert); the perturbations are drawn from `seed`.
+    pub(super) fn with_actions_around(mut self, expert: Sac, count: usize, seed: u64) -> Self {
+        self.around = Some(AroundActions {
+            expert,
+            count,
+            noise: Normal::new(0.0, 0.3).expect("a positive sd"),
+            rng: ChaCha8Rng::seed_from_u64(seed ^ 0x1d6e_a5c7_0000_0003),
+            rhos: Vec::new(),
+        });
+        self
     }
 
     /// H_hat and the teacher's answer on one step (the action shown to the critic scaled as
@@ -91,6 +131,9 @@ impl Judge {
             predicted,
         });
         self.judged.push((predicted, answer));
+        if let Some(around) = self.around.as_mut() {
+            around.rank(&mut self.critic, seen.obs, seen.action, self.action_scale);
+        }
         (predicted, answer)
     }
 
@@ -115,8 +158,69 @@ impl Judge {
             h_hat_mean_bad: mean(&bad),
             sign_agreement: agree as f64 / (good.len() + bad.len()).max(1) as f64,
             auc_good_over_bad: auc(&good, &bad),
+            within_state_rank_correlation: self
+                .around
+                .as_ref()
+                .map(|a| a.rhos.iter().sum::<f64>() / a.rhos.len().max(1) as f64),
+            within_state_steps: self.around.as_ref().map(|a| a.rhos.len()),
         }
     }
+}
+
+impl AroundActions {
+    /// H_hat and the expert's Q on `action` and `count` actions around it, as both critics are
+    /// shown them (scaled by `scale`), and their rank correlation.
+    fn rank(&mut self, critic: &mut Sac, obs: &[f32], action: &[f32], scale: f32) {
+        let (mut h, mut q) = (Vec::new(), Vec::new());
+        let mut shown = vec![0.0; action.len()];
+        for k in 0..=self.count {
+            for (s, a) in shown.iter_mut().zip(action) {
+                let moved = if k == 0 {
+                    *a
+                } else {
+                    (a + self.noise.sample(&mut self.rng)).clamp(-1.0, 1.0)
+                };
+                *s = moved * scale;
+            }
+            h.push(critic.human_estimate(obs, &shown));
+            q.push(self.expert.q_value(obs, &shown));
+        }
+        if let Some(rho) = spearman(&h, &q) {
+            self.rhos.push(rho);
+        }
+    }
+}
+
+/// Spearman's rho (Pearson's on midranks); `None` when either side is constant.
+fn spearman(xs: &[f32], ys: &[f32]) -> Option<f64> {
+    let (rx, ry) = (midranks(xs), midranks(ys));
+    let n = rx.len() as f64;
+    let (mx, my) = (rx.iter().sum::<f64>() / n, ry.iter().sum::<f64>() / n);
+    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+    for (x, y) in rx.iter().zip(&ry) {
+        sxy += (x - mx) * (y - my);
+        sxx += (x - mx) * (x - mx);
+        syy += (y - my) * (y - my);
+    }
+    (sxx > 0.0 && syy > 0.0).then(|| sxy / (sxx * syy).sqrt())
+}
+
+/// Each value's rank from 1, ties sharing their mean rank.
+fn midranks(values: &[f32]) -> Vec<f64> {
+    let mut order: Vec<usize> = (0..values.len()).collect();
+    order.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
+    let mut ranks = vec![0.0; values.len()];
+    let mut i = 0;
+    while i < order.len() {
+        let j = (i..order.len())
+            .find(|&j| values[order[j]] != values[order[i]])
+            .unwrap_or(order.len());
+        for &at in &order[i..j] {
+            ranks[at] = (i + j + 1) as f64 / 2.0;
+        }
+        i = j;
+    }
+    ranks
 }
 
 /// P(x > y) + P(x = y) / 2 for x from `xs`, y from `ys` (0.5 when either is empty), by ranks.
@@ -146,7 +250,17 @@ fn auc(xs: &[f32], ys: &[f32]) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::auc;
+    use super::{auc, spearman};
+
+    #[test]
+    fn spearman_ranks_with_ties_and_says_when_it_cannot() {
+        assert_eq!(spearman(&[1.0, 2.0, 3.0], &[10.0, 20.0, 30.0]), Some(1.0));
+        assert_eq!(spearman(&[1.0, 2.0, 3.0], &[3.0, 2.0, 1.0]), Some(-1.0));
+        assert_eq!(spearman(&[1.0, 1.0, 1.0], &[3.0, 2.0, 1.0]), None);
+        // Midranks (1.5, 1.5, 3) against (1, 2, 3): 1.5 / sqrt(1.5 * 2).
+        let rho = spearman(&[5.0, 5.0, 9.0], &[1.0, 2.0, 3.0]).unwrap();
+        assert!((rho - 0.866_025_403_784_438_6).abs() < 1e-12, "{rho}");
+    }
 
     #[test]
     fn auc_counts_pairs_and_half_ties() {
