@@ -103,7 +103,7 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
                 // The critic is the learner's own (or --critic-from's), apart from the copy
                 // that acts; the teacher is this run's, at its step.
                 let critic = match &args.critic_from {
-                    None => EvaluativeRun::checkpoint_learner(&bytes)?.1,
+                    None => learner.clone(),
                     Some(other) => {
                         let bytes = fs::read(other)
                             .with_context(|| format!("--critic-from {}", other.display()))?;
@@ -117,9 +117,8 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
                 };
                 let expert = crate::session::load_task_expert(None, task)?;
                 let act_dim = config.make_env().spec().action_space.dim();
-                let mut judged = Judge::new(&config, critic, expert, step, act_dim)?;
+                let mut judged = Judge::new(&config, critic, expert.clone(), step, act_dim)?;
                 if args.judge_actions > 0 {
-                    let expert = crate::session::load_task_expert(None, task)?;
                     judged = judged.with_actions_around(expert, args.judge_actions, args.seed);
                 }
                 judge = Some(judged);

@@ -228,22 +228,8 @@ fn auc(xs: &[f32], ys: &[f32]) -> f64 {
     if xs.is_empty() || ys.is_empty() {
         return 0.5;
     }
-    let mut all: Vec<(f32, bool)> = xs
-        .iter()
-        .map(|&x| (x, true))
-        .chain(ys.iter().map(|&y| (y, false)))
-        .collect();
-    all.sort_by(|a, b| a.0.total_cmp(&b.0));
-    // Midranks over ties, summed for the xs.
-    let (mut rank_sum, mut i) = (0.0f64, 0);
-    while i < all.len() {
-        let j = (i..all.len())
-            .find(|&j| all[j].0 != all[i].0)
-            .unwrap_or(all.len());
-        let midrank = (i + j + 1) as f64 / 2.0;
-        rank_sum += midrank * all[i..j].iter().filter(|(_, x)| *x).count() as f64;
-        i = j;
-    }
+    let pooled: Vec<f32> = xs.iter().chain(ys).copied().collect();
+    let rank_sum: f64 = midranks(&pooled)[..xs.len()].iter().sum();
     let (n, m) = (xs.len() as f64, ys.len() as f64);
     (rank_sum - n * (n + 1.0) / 2.0) / (n * m)
 }
