@@ -235,6 +235,55 @@ fn judge_sets_the_runs_critic_beside_its_teacher_on_each_step() {
         "another critic"
     );
 
+    // The run's critic fitted again from fresh heads on its first 100 answers: the same steps
+    // and answers, another critic, said in the summary; the same seed gives the same critic.
+    let refit = |seed: &str| {
+        judged(&[
+            "--refit-critic",
+            "30",
+            "--refit-answers",
+            "100",
+            "--refit-seed",
+            seed,
+        ])
+    };
+    let (refit_a, refit_b, refit_c) = (refit("0"), refit("0"), refit("1"));
+    assert_eq!(refit_a["judge"]["good"], judge["good"]);
+    let report = &refit_a["judge"]["refit"];
+    assert_eq!(
+        (report["updates"].as_u64(), report["answers"].as_u64()),
+        (Some(30), Some(100))
+    );
+    assert!(
+        judge.get("refit").is_none(),
+        "the run's own critic: no refit"
+    );
+    assert_eq!(refit_a["judge"], refit_b["judge"]);
+    for fitted in [&refit_a, &refit_c] {
+        assert_ne!(fitted["judge"]["h_hat_mean_good"], judge["h_hat_mean_good"]);
+    }
+    assert_ne!(
+        refit_c["judge"]["h_hat_mean_good"],
+        refit_a["judge"]["h_hat_mean_good"]
+    );
+    // More answers than the replay holds: refused, naming the option and the count.
+    let mut args = vec![
+        "sim",
+        "--checkpoint",
+        &last,
+        "--judge",
+        "--refit-critic",
+        "5",
+    ];
+    args.extend(["--refit-answers", "100000"]);
+    let out = dualrep(&args, d);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("--refit-critic") && stderr.contains("100000 answers asked for"),
+        "{stderr}"
+    );
+
     // A run without answers has no critic to judge.
     let mut sac = small_lunar_sac("400", "200", "sac-kept");
     sac.push("--keep-checkpoints");

@@ -11,10 +11,11 @@ use anyhow::{Context, bail};
 use clap::Args;
 
 use super::overrides::parse_pair;
-use super::sim_judge::Judge;
+use super::sim_judge::{Judge, refit_critic};
 use crate::guidance::evaluative_run::{EvaluativeRun, EvaluativeRunConfig};
 use crate::guidance::evaluative_trainer::Evaluation;
 use crate::rl::Sac;
+use crate::rl::sac::Refit;
 use crate::scene_graph::SceneGraph;
 use crate::settings::Settings;
 use crate::sim::rollout::{ActionNoise, Actor, SimplePolicy, StepSeen, run_episodes_watched};
@@ -52,6 +53,23 @@ pub struct SimArgs {
     /// `within_state_rank_correlation` is their mean Spearman's rho over the steps (0: off).
     #[arg(long, value_name = "K", default_value_t = 0, requires = "judge")]
     pub judge_actions: usize,
+    /// With --judge: judge instead a human critic fitted again from fresh heads for N gradient
+    /// steps (the run's batch size and learning rate) on the answered transitions of the
+    /// critic's checkpoint's replay alone: what those answers teach apart from the run that
+    /// asked them (0: the critic as the run left it).
+    #[arg(long, value_name = "N", default_value_t = 0, requires = "judge")]
+    pub refit_critic: u64,
+    /// With --refit-critic: only the replay's first K answered transitions (by time).
+    #[arg(long, value_name = "K", requires = "refit_critic")]
+    pub refit_answers: Option<usize>,
+    /// With --refit-critic: the seed of the fresh heads and of their batches.
+    #[arg(
+        long,
+        value_name = "SEED",
+        default_value_t = 0,
+        requires = "refit_critic"
+    )]
+    pub refit_seed: u64,
     /// Number of episodes (seeds seed, seed + 1, ...).
     #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
     pub episodes: u32,
@@ -102,22 +120,37 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
             if args.judge {
                 // The critic is the learner's own (or --critic-from's), apart from the copy
                 // that acts; the teacher is this run's, at its step.
-                let critic = match &args.critic_from {
-                    None => learner.clone(),
+                let other_bytes;
+                let (mut critic, critic_bytes) = match &args.critic_from {
+                    None => (learner.clone(), &bytes),
                     Some(other) => {
-                        let bytes = fs::read(other)
+                        other_bytes = fs::read(other)
                             .with_context(|| format!("--critic-from {}", other.display()))?;
-                        let (_, _, critic, at) = checkpoint_policy(&bytes, other, Some(task))?;
+                        let (_, _, critic, at) =
+                            checkpoint_policy(&other_bytes, other, Some(task))?;
                         eprintln!(
                             "sim: judged by the critic of {} after {at} steps",
                             other.display()
                         );
-                        critic
+                        (critic, &other_bytes)
                     }
+                };
+                let refit = match args.refit_critic {
+                    0 => None,
+                    updates => Some(refit_critic(
+                        &mut critic,
+                        critic_bytes,
+                        Refit {
+                            updates,
+                            answers: args.refit_answers,
+                            seed: args.refit_seed,
+                        },
+                    )?),
                 };
                 let expert = crate::session::load_task_expert(None, task)?;
                 let act_dim = config.make_env().spec().action_space.dim();
-                let mut judged = Judge::new(&config, critic, expert.clone(), step, act_dim)?;
+                let mut judged =
+                    Judge::new(&config, critic, expert.clone(), step, act_dim)?.with_refit(refit);
                 if args.judge_actions > 0 {
                     judged = judged.with_actions_around(expert, args.judge_actions, args.seed);
                 }

@@ -4,15 +4,17 @@
 //! that reads H_hat everywhere (`mix = authors`) learns from the critic instead of the teacher:
 //! how well the one stands in for the other on the policy's own steps is what this measures.
 
+use anyhow::Context as _;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 
-use crate::guidance::evaluative_run::EvaluativeRunConfig;
+use crate::guidance::evaluative_run::{EvaluativeRun, EvaluativeRunConfig};
 use crate::guidance::evaluative_trainer::{Evaluation, EvaluativeQuery, EvaluativeTrainer};
 use crate::guidance::expert_oracle::ExpertOracle;
 use crate::rl::Sac;
+use crate::rl::sac::{Refit, RefitReport};
 use crate::scene_graph::SceneGraph;
 use crate::sim::Outcome;
 use crate::sim::rollout::StepSeen;
@@ -29,6 +31,8 @@ pub(super) struct Judge {
     judged: Vec<(f32, Evaluation)>,
     /// Actions around each step's, ranked by H_hat and by the expert's Q (`--judge-actions`).
     around: Option<AroundActions>,
+    /// How the critic was fitted again, if it was (`--refit-critic`).
+    refit: Option<RefitReport>,
 }
 
 /// Other actions in each state: does H_hat order them as the teacher's critic does? The actor
@@ -68,6 +72,10 @@ pub(super) struct JudgeSummary {
     pub within_state_rank_correlation: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub within_state_steps: Option<usize>,
+    /// With `--refit-critic`: the judged critic is not the run's but one fitted again on its
+    /// answers alone: the gradient steps, the answers drawn from, the last steps' loss.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub refit: Option<RefitReport>,
 }
 
 impl Judge {
@@ -97,6 +105,7 @@ impl Judge {
             shown_action: vec![0.0; act_dim],
             judged: Vec::new(),
             around: None,
+            refit: None,
         })
     }
 
@@ -110,6 +119,13 @@ impl Judge {
             rng: ChaCha8Rng::seed_from_u64(seed ^ 0x1d6e_a5c7_0000_0003),
             rhos: Vec::new(),
         });
+        self
+    }
+
+    /// The critic judged is one fitted again as `refit` says (`--refit-critic`): said in the
+    /// summary.
+    pub(super) fn with_refit(mut self, refit: Option<RefitReport>) -> Self {
+        self.refit = refit;
         self
     }
 
@@ -163,8 +179,31 @@ impl Judge {
                 .as_ref()
                 .map(|a| a.rhos.iter().sum::<f64>() / a.rhos.len().max(1) as f64),
             within_state_steps: self.around.as_ref().map(|a| a.rhos.len()),
+            refit: self.refit,
         }
     }
+}
+
+/// `critic`'s human critic fitted again on the answers of `checkpoint`'s replay (the critic's
+/// own run's checkpoint), as `refit` says.
+pub(super) fn refit_critic(
+    critic: &mut Sac,
+    checkpoint: &[u8],
+    refit: Refit,
+) -> anyhow::Result<RefitReport> {
+    let replay = EvaluativeRun::checkpoint_replay(checkpoint).context("--refit-critic")?;
+    let report = critic
+        .refit_human_critic(&replay, refit)
+        .context("--refit-critic")?;
+    eprintln!(
+        "sim: the critic fitted again from fresh heads (seed {}): {} gradient steps on {} of the replay's {} answered transitions, last loss {:.4}",
+        refit.seed,
+        report.updates,
+        report.answers,
+        replay.answered_len(),
+        report.final_loss
+    );
+    Ok(report)
 }
 
 impl AroundActions {

@@ -281,12 +281,19 @@ impl ReplayBuffer {
     /// them. While none has an answer nothing is drawn and the batch's H is all 0: a batch
     /// without feedback, which the masked critic already skips.
     pub fn sample_answered<R: Rng>(&self, rng: &mut R, batch: &mut Batch) {
-        if self.answered.is_empty() {
+        self.sample_answered_first(rng, batch, self.answered.len());
+    }
+
+    /// [`ReplayBuffer::sample_answered`] among the first `first` answered slots by slot number
+    /// (by time, until the buffer wraps), or all of them if there are fewer.
+    pub fn sample_answered_first<R: Rng>(&self, rng: &mut R, batch: &mut Batch, first: usize) {
+        let among = &self.answered[..first.min(self.answered.len())];
+        if among.is_empty() {
             batch.human.fill(0.0);
             return;
         }
         for b in 0..batch.size {
-            let i = self.answered[rng.random_range(0..self.answered.len())];
+            let i = among[rng.random_range(0..among.len())];
             self.copy_row(i, batch, b);
         }
     }

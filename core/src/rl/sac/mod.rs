@@ -11,6 +11,8 @@
 //! - [`checkpoint`]: everything needed to resume, as safetensors bytes.
 //! - `flops`: [`mflop_per_update`], the arithmetic of one update, and what the actor loss skips
 //!   of it ([`mflop_skipped_per_update`]), for the benchmark.
+//! - [`refit`]: the human critic fitted again from fresh heads on a replay's answers alone, to
+//!   measure what the answers teach apart from the run (`sim --judge --refit-critic`).
 //!
 //! No IO here: a checkpoint is bytes, written by the caller.
 
@@ -18,6 +20,7 @@ mod buffers;
 pub mod checkpoint;
 pub mod config;
 mod flops;
+pub mod refit;
 mod update;
 
 #[cfg(test)]
@@ -36,6 +39,7 @@ use buffers::{StepBuffers, fill_critic_input};
 pub use checkpoint::CheckpointError;
 pub use config::{ActorMix, CriticLoss, HumanCriticConfig, SacConfig};
 pub use flops::{mflop_per_update, mflop_skipped_per_update};
+pub use refit::{Refit, RefitError, RefitReport};
 
 /// Losses and temperature of an update, averaged over its gradient steps.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]

@@ -384,7 +384,12 @@ fn sum_of_halves((first, second): (f32, f32)) -> f32 {
 /// `regression`'s loss of `net(input)` against `target`, scaled by 0.5 in the gradient (SB3's
 /// `0.5 * sum_j` over twins): zero the net's gradient, forward, backward. Returns the unscaled
 /// loss.
-fn regress(net: &mut Mlp, ws: &mut MlpWorkspace, target: &[f32], regression: Regression) -> f32 {
+pub(super) fn regress(
+    net: &mut Mlp,
+    ws: &mut MlpWorkspace,
+    target: &[f32],
+    regression: Regression,
+) -> f32 {
     net.zero_grad();
     net.forward(ws);
     let (prediction, grad) = ws.output_and_grad_mut();

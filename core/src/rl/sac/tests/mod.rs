@@ -3,6 +3,7 @@
 
 mod answer_replay;
 mod gradients;
+mod refit;
 mod target;
 mod threads;
 mod torch_reference;
