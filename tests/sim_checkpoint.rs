@@ -283,6 +283,21 @@ fn judge_sets_the_runs_critic_beside_its_teacher_on_each_step() {
         stderr.contains("--refit-critic") && stderr.contains("100000 answers asked for"),
         "{stderr}"
     );
+    // No gradient steps is no refit: refused rather than read as "the run's own critic".
+    let out = dualrep(
+        &[
+            "sim",
+            "--checkpoint",
+            &last,
+            "--judge",
+            "--refit-critic",
+            "0",
+        ],
+        d,
+    );
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("--refit-critic"), "{stderr}");
 
     // A run without answers has no critic to judge.
     let mut sac = small_lunar_sac("400", "200", "sac-kept");

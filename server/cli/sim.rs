@@ -56,9 +56,9 @@ pub struct SimArgs {
     /// With --judge: judge instead a human critic fitted again from fresh heads for N gradient
     /// steps (the run's batch size and learning rate) on the answered transitions of the
     /// critic's checkpoint's replay alone: what those answers teach apart from the run that
-    /// asked them (0: the critic as the run left it).
-    #[arg(long, value_name = "N", default_value_t = 0, requires = "judge")]
-    pub refit_critic: u64,
+    /// asked them.
+    #[arg(long, value_name = "N", requires = "judge", value_parser = clap::value_parser!(u64).range(1..))]
+    pub refit_critic: Option<u64>,
     /// With --refit-critic: only the replay's first K answered transitions (by time).
     #[arg(long, value_name = "K", requires = "refit_critic")]
     pub refit_answers: Option<usize>,
@@ -136,8 +136,8 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
                     }
                 };
                 let refit = match args.refit_critic {
-                    0 => None,
-                    updates => Some(refit_critic(
+                    None => None,
+                    Some(updates) => Some(refit_critic(
                         &mut critic,
                         critic_bytes,
                         Refit {
