@@ -277,8 +277,7 @@ fn judge_sets_the_runs_critic_beside_its_teacher_on_each_step() {
     ];
     args.extend(["--refit-answers", "100000"]);
     let out = dualrep(&args, d);
-    assert!(!out.status.success());
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stderr = cli::refused(&out);
     assert!(
         stderr.contains("--refit-critic") && stderr.contains("100000 answers asked for"),
         "{stderr}"
@@ -295,8 +294,7 @@ fn judge_sets_the_runs_critic_beside_its_teacher_on_each_step() {
         ],
         d,
     );
-    assert!(!out.status.success());
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stderr = cli::refused(&out);
     assert!(stderr.contains("--refit-critic"), "{stderr}");
 
     // A run without answers has no critic to judge.
@@ -313,7 +311,6 @@ fn judge_sets_the_runs_critic_beside_its_teacher_on_each_step() {
         &["sim", "--checkpoint", first.to_str().unwrap(), "--judge"],
         d,
     );
-    assert!(!out.status.success());
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stderr = cli::refused(&out);
     assert!(stderr.contains("no human critic"), "{stderr}");
 }

@@ -24,6 +24,16 @@ pub fn ok(out: &Output) -> serde_json::Value {
     serde_json::from_str(stdout.lines().last().expect("a summary line")).unwrap()
 }
 
+/// The stderr of a command that had to fail, asserting that it did.
+pub fn refused(out: &Output) -> String {
+    assert!(
+        !out.status.success(),
+        "succeeded where it should fail; stdout: {}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
 /// `dualrep args` started in `d`, returned running once `file` (under `d`) exists.
 pub fn running_once<S: AsRef<std::ffi::OsStr>>(
     args: &[S],

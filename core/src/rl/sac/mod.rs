@@ -62,6 +62,28 @@ struct HumanCritic {
     optimizer: Adam,
 }
 
+impl HumanCritic {
+    /// Fresh heads on `[s; a]` of `width` inputs (PyTorch's initialisation, H_1 then H_2 from
+    /// `rng`).
+    fn draw_heads(width: usize, hidden: &[usize], rng: &mut ChaCha8Rng) -> (Mlp, Mlp) {
+        let h1 = Mlp::new(width, hidden, 1, rng);
+        let h2 = Mlp::new(width, hidden, 1, rng);
+        (h1, h2)
+    }
+
+    /// The heads with a fresh Adam of step size `learning_rate`.
+    fn with_fresh_optimizer((h1, h2): (Mlp, Mlp), learning_rate: f32) -> Self {
+        Self {
+            optimizer: Adam::new(
+                AdamConfig::with_lr(f64::from(learning_rate)),
+                &[h1.params().len(), h2.params().len()],
+            ),
+            h1,
+            h2,
+        }
+    }
+}
+
 /// A SAC learner: tanh-Gaussian actor, twin Q critics with Polyak targets, automatic entropy
 /// temperature, and optionally DREF's twin human critic. Owns its RNG (batch sampling and all
 /// policy noise), so a seed and the sequence of calls determine everything.
@@ -117,11 +139,10 @@ impl Sac {
         };
         let q1 = env_critic(&mut rng);
         let q2 = env_critic(&mut rng);
-        let human = config.human_critic.is_some().then(|| {
-            let h1 = Mlp::new(obs_dim + act_dim, hidden, 1, &mut rng);
-            let h2 = Mlp::new(obs_dim + act_dim, hidden, 1, &mut rng);
-            (h1, h2)
-        });
+        let human = config
+            .human_critic
+            .is_some()
+            .then(|| HumanCritic::draw_heads(obs_dim + act_dim, hidden, &mut rng));
         Self::from_parts(obs_dim, act_dim, config, actor, [q1, q2], human, rng)
     }
 
@@ -139,11 +160,8 @@ impl Sac {
         assert!(obs_dim > 0 && act_dim > 0, "empty observation or action");
         assert!(config.batch_size > 0, "batch_size must be positive");
         let adam = || AdamConfig::with_lr(f64::from(config.learning_rate));
-        let human_critic = human.map(|(h1, h2)| HumanCritic {
-            optimizer: Adam::new(adam(), &[h1.params().len(), h2.params().len()]),
-            h1,
-            h2,
-        });
+        let human_critic =
+            human.map(|heads| HumanCritic::with_fresh_optimizer(heads, config.learning_rate));
         let buffers = StepBuffers::new(
             obs_dim,
             act_dim,

@@ -8,9 +8,10 @@
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
+use crate::rl::kernels::side_by_side;
 use crate::rl::loss::Regression;
 use crate::rl::replay::{Batch, ReplayBuffer};
-use crate::rl::{Adam, AdamConfig, Mlp};
+use crate::rl::{Mlp, MlpWorkspace};
 
 use super::buffers::fill_critic_input;
 use super::update::regress;
@@ -102,23 +103,26 @@ impl Sac {
             Some(asked) => asked,
         };
         let mut rng = ChaCha8Rng::seed_from_u64(refit.seed);
-        let width = self.obs_dim + self.act_dim;
-        let mut h1 = Mlp::new(width, &self.config.hidden, 1, &mut rng);
-        let mut h2 = Mlp::new(width, &self.config.hidden, 1, &mut rng);
-        let mut optimizer = Adam::new(
-            AdamConfig::with_lr(f64::from(self.config.learning_rate)),
-            &[h1.params().len(), h2.params().len()],
-        );
+        let heads =
+            HumanCritic::draw_heads(self.obs_dim + self.act_dim, &self.config.hidden, &mut rng);
+        let HumanCritic {
+            mut h1,
+            mut h2,
+            mut optimizer,
+        } = HumanCritic::with_fresh_optimizer(heads, self.config.learning_rate);
         let size = self.config.batch_size;
         let mut batch = Batch::new(size, self.obs_dim, self.act_dim);
         let (mut ws1, mut ws2) = (h1.workspace(size), h2.workspace(size));
         let mut recent = Vec::with_capacity(100);
         for step in 0..refit.updates {
             replay.sample_answered_first(&mut rng, &mut batch, answers);
-            fill_critic_input(&mut ws1, &batch.obs, &batch.actions);
-            fill_critic_input(&mut ws2, &batch.obs, &batch.actions);
-            let first = regress(&mut h1, &mut ws1, &batch.human, Regression::Mse);
-            let second = regress(&mut h2, &mut ws2, &batch.human, Regression::Mse);
+            // The twins side by side, as the run's step 5 takes them.
+            let fit = |h: &mut Mlp, ws: &mut MlpWorkspace| {
+                fill_critic_input(ws, &batch.obs, &batch.actions);
+                regress(h, ws, &batch.human, Regression::Mse)
+            };
+            let (first, second) =
+                side_by_side(|| fit(&mut h1, &mut ws1), || fit(&mut h2, &mut ws2));
             optimizer.step([h1.params_and_grads(), h2.params_and_grads()]);
             if refit.updates - step <= 100 {
                 recent.push(0.5 * (first + second));
