@@ -8,7 +8,8 @@
 #   bash benches/grids/resume_normed_grid.sh [GRID]      # GRID: /work/grid by default
 #
 # The binary must know `train --branch-from FOLDER` (eaa0da9c or later; training unchanged since
-# cab5e144): the newest in GRID/bin that does is used, else one is built and copied there.
+# cab5e144): the newest in GRID/bin named by its commit that does is used, else one is built and
+# copied there.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 grid=${1:-/work/grid}
@@ -19,7 +20,10 @@ if pgrep -f 'local_runs.sh' > /dev/null; then
 fi
 mkdir -p "$grid/bin" "$grid/scratch"
 bin=""
+# Only binaries named by their commit (dualrep-<8 hex digits>): the grid's record names the commit
+# it ran, so a binary built from a tree that is no commit (a work in progress) is never picked.
 for candidate in $(ls -t "$grid"/bin/dualrep-* 2> /dev/null); do
+  [[ $(basename "$candidate") =~ ^dualrep-[0-9a-f]{8}$ ]] || continue
   if "$candidate" train --help | grep -q 'given a folder of kept ones'; then
     bin=$candidate
     break
