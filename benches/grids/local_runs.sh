@@ -32,6 +32,20 @@ one() {
   steps=(--steps 100000)
   [[ " $* " == *" --steps "* ]] && steps=()
   mkdir -p "$scratch/$dir"
+  # A branch whose source checkpoint is gone (a new machine, where SCRATCH did not survive) and
+  # that has no checkpoint of its own runs from step 0 instead: `train --branch-from` writes the
+  # rows, curves and summary that the same arguments run from step 0 write (tests/train_branch.rs),
+  # so only the time differs. Said in the log, so the record shows which way it ran.
+  local args=("$@") i
+  for i in "${!args[@]}"; do
+    if [ "${args[$i]}" = --branch-from ] && [ ! -e "${args[$((i + 1))]}" ] \
+      && [ ! -e "$scratch/$dir/checkpoint.run" ]; then
+      echo "$(date -u +%FT%TZ) $dir: ${args[$((i + 1))]} is gone; run from step 0"
+      args=("${args[@]:0:$i}" "${args[@]:$((i + 2))}")
+      break
+    fi
+  done
+  set -- "${args[@]}"
   t0=$(date +%s)
   nice -n 10 "$bin" --threads 1 train "${steps[@]}" --out "$scratch/$dir" "$@" \
     >> "$scratch/$dir/stdout.log" 2>> "$scratch/$dir/stderr.log"
