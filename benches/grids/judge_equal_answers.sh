@@ -10,17 +10,13 @@
 set -euo pipefail
 bin=$1 early=$2 dref=$3 out=$4
 mkdir -p "$out"
+source "$(dirname "$0")/judge_run.sh"
 judge() {  # judge EF-100-checkpoint DREF-checkpoint
   local e=$1 d=$2
   local es ds
   es=$(basename "$e" .run | sed 's/^step-0*//')
   ds=$(basename "$d" .run | sed 's/^step-0*//')
-  local target="$out/e$es-on-$ds.json"
-  [ -s "$target" ] && return 0
-  "$bin" --threads 1 sim --task lunar-lander --checkpoint "$d" --judge --critic-from "$e" \
-    --judge-actions 8 --episodes 50 --seed 1000 > "$target.partial"
-  mv "$target.partial" "$target"
-  echo "$(date -u +%FT%TZ) $target"
+  judge_into "$out/e$es-on-$ds.json" --checkpoint "$d" --critic-from "$e"
 }
 # The reading's two equal-count points first, then the curve on the latest DREF checkpoint, then
 # the equal-count critics on the other two.

@@ -9,14 +9,11 @@
 set -euo pipefail
 bin=$1 dref=$2 early=$3 out=$4
 mkdir -p "$out"
+source "$(dirname "$0")/judge_run.sh"
 judge() {  # judge OUT-NAME SIM-ARGUMENTS...
-  local target="$out/$1"
+  local name=$1
   shift
-  [ -s "$target" ] && return 0
-  "$bin" --threads 1 sim --task lunar-lander --judge --judge-actions 8 --episodes 50 --seed 1000 \
-    "$@" > "$target.partial"
-  mv "$target.partial" "$target"
-  echo "$(date -u +%FT%TZ) $target"
+  judge_into "$out/$name" "$@"
 }
 judge rd-80152-s0.json --checkpoint "$dref/step-000080152.run" --refit-critic 20000
 judge re-80152-s0.json --checkpoint "$dref/step-000080152.run" \
