@@ -5,22 +5,25 @@
 # metrics.csv and summary.json are copied to RESULTS/<dir> at once (commit them as they come).
 # A new machine starts where the repository is: nothing but RESULTS is needed to resume.
 #
-#   nohup bash benches/grids/local_runs.sh BINARY JOBS SCRATCH RESULTS [PARALLEL] > LOG 2>&1 &
+#   nohup bash benches/grids/local_runs.sh BINARY JOBS SCRATCH RESULTS [PARALLEL [THREADS]] > LOG 2>&1 &
 #
 # BINARY: a copy of the release binary outside target/ (the grids' rule). JOBS: one run a line,
 # `<dir under RESULTS> <train arguments...>`, e.g.
 #   dref-ablation/ablation-window/placing/dref-authors/seed4 --task placing --method dref-authors --seed 4 --set rank_window=1000
-# (100,000 steps unless the line sets `--steps`; one thread a run). Lines start in order: put the
-# runs that matter most first.
+# (100,000 steps unless the line sets `--steps`). Lines start in order: put the runs that matter
+# most first. THREADS (1 unless given) is each run's `--threads`: results do not depend on it (the
+# kernels compute whole output elements per thread), so one run at a time on both cores of a
+# 2-core machine finishes a run in a session where two side by side would not.
 set -u
 bin=${1:?the dualrep binary}
 jobs=${2:?the jobs file}
 scratch=${3:?the scratch folder}
 results=${4:?the results folder (docs/results)}
 parallel=${5:-2}
+threads=${6:-1}
 echo "cpu: $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) cores, avx512f: $(grep -c -m1 avx512f /proc/cpuinfo)"
-echo "binary: $bin ($(sha256sum "$bin" | cut -c1-12))"
-export bin scratch results
+echo "binary: $bin ($(sha256sum "$bin" | cut -c1-12)), $parallel at a time, $threads threads each"
+export bin scratch results threads
 # `nice` orders processes only inside their autogroup, and a runner started under setsid has one
 # of its own, so without this the grid takes its full share of the cores from a build or test
 # beside it whatever its nice; the autogroup's nice is what the scheduler weighs between them.
@@ -47,7 +50,7 @@ one() {
   done
   set -- "${args[@]}"
   t0=$(date +%s)
-  nice -n 10 "$bin" --threads 1 train "${steps[@]}" --out "$scratch/$dir" "$@" \
+  nice -n 10 "$bin" --threads "$threads" train "${steps[@]}" --out "$scratch/$dir" "$@" \
     >> "$scratch/$dir/stdout.log" 2>> "$scratch/$dir/stderr.log"
   rc=$?
   if [ $rc -eq 0 ] && [ -e "$scratch/$dir/summary.json" ]; then

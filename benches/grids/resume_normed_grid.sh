@@ -1,9 +1,13 @@
 #!/usr/bin/env bash
 # Starts (or resumes) the normed learner's Lunar Lander grid on this machine, from the repository
 # alone if need be: the queue of lunar_layer_norm_queue.py (the rows, each seed's cuts at 60k
-# after its pair, then SAC alone normed) run by local_runs.sh, two at a time, from a copy of the
-# release binary outside target/. Runs already in docs/results are skipped; runs stopped midway
-# resume from their checkpoints under the grid folder's scratch/, if it survived.
+# after its pair, then SAC alone normed) run by local_runs.sh from a copy of the release binary
+# outside target/: on a machine of fewer than 4 cores one run at a time on all of them (on the
+# 2-core AVX2 EPYC, 2,290 steps a minute at 6k-10k steps, where two side by side on one thread
+# each made 630-690: a 150k run fits in a session, and a machine lost between sessions loses
+# none), else two at a time on one thread each. Runs
+# already in docs/results are skipped; runs stopped midway resume from their checkpoints under
+# the grid folder's scratch/, if it survived.
 #
 #   bash benches/grids/resume_normed_grid.sh [GRID]      # GRID: /work/grid by default
 #
@@ -35,6 +39,8 @@ if [ -z "$bin" ]; then
   cp target/release/dualrep "$bin"
 fi
 python3 benches/grids/lunar_layer_norm_queue.py > "$grid/ln-queue.jobs"
+parallel=2 threads=1
+if [ "$(nproc)" -lt 4 ]; then parallel=1 threads=$(nproc); fi
 nohup setsid bash benches/grids/local_runs.sh "$bin" "$grid/ln-queue.jobs" "$grid/scratch" \
-  docs/results 2 >> "$grid/ln-rows.log" 2>&1 < /dev/null &
+  docs/results "$parallel" "$threads" >> "$grid/ln-rows.log" 2>&1 < /dev/null &
 echo "started: $bin on $grid/ln-queue.jobs ($(grep -cv '^\s*\(#\|$\)' "$grid/ln-queue.jobs") lines); log $grid/ln-rows.log"
