@@ -11,9 +11,10 @@
 # `<dir under RESULTS> <train arguments...>`, e.g.
 #   dref-ablation/ablation-window/placing/dref-authors/seed4 --task placing --method dref-authors --seed 4 --set rank_window=1000
 # (100,000 steps unless the line sets `--steps`). Lines start in order: put the runs that matter
-# most first. THREADS (1 unless given) is each run's `--threads`: results do not depend on it (the
-# kernels compute whole output elements per thread), so one run at a time on both cores of a
-# 2-core machine finishes a run in a session where two side by side would not.
+# most first. THREADS (1 unless given) is each run's `--threads`: results do not depend on it
+# (core's a_run_is_the_same_bits_on_avx512_and_avx2_and_on_any_number_of_threads), so one run at
+# a time on both cores of a 2-core machine finishes a run in a session where two side by side
+# would not.
 set -u
 bin=${1:?the dualrep binary}
 jobs=${2:?the jobs file}
