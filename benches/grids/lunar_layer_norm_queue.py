@@ -2,7 +2,8 @@
 """The queue `local_runs.sh` runs for the normed learner's grid since the fifty-fifth stop: the
 probe, then the rows (lunar-layer-norm-rows.jobs), each seed's cut-at-60k branches
 (lunar-layer-norm-branches.jobs) right after its EF-100 normed line, so that a branch starts
-once its seed's pair has run past 60k and before SAC alone normed.
+once its seed's pair has run past 60k; then, since the sixtieth stop, DREF normed until 60k on
+the seeds with no branch (lunar-layer-norm-until-60k.jobs) before SAC alone normed.
 
     python3 benches/grids/lunar_layer_norm_queue.py > /work/grid/ln-queue.jobs
 """
@@ -23,8 +24,12 @@ def queue() -> str:
         for line in (GRIDS / "lunar-layer-norm-branches.jobs").read_text().splitlines(keepends=True)
         if line.strip() and not line.startswith("#")
     ]
+    until_60k = (GRIDS / "lunar-layer-norm-until-60k.jobs").read_text()
     out = [(GRIDS / "lunar-layer-norm-probe.jobs").read_text()]
     for line in rows:
+        if until_60k and re.match(r"\S*/lunar-lander/sac/seed\d+ ", line):
+            out.append(until_60k)
+            until_60k = ""
         out.append(line)
         ef100 = re.match(r"\S*/lunar-lander/ef-100/seed(\d+) ", line)
         if ef100:

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Starts (or resumes) the normed learner's Lunar Lander grid on this machine, from the repository
 # alone if need be: the queue of lunar_layer_norm_queue.py (the rows, each seed's cuts at 60k
-# after its pair, then SAC alone normed) run by local_runs.sh from a copy of the release binary
+# after its pair, DREF normed until 60k on the other seeds, then SAC alone normed) run by local_runs.sh from a copy of the release binary
 # outside target/: on a machine of fewer than 4 cores one run at a time on all of them (on the
 # 2-core AVX2 EPYC, 1,900-2,090 steps a minute over a 150k run, 72-79 min, where two side by
 # side on one thread each made 630-690: a run ends inside a session, and a machine lost between
