@@ -15,8 +15,11 @@ reward and fails at most 0.05 of its late episodes; it is carried by the late an
 less than 0.75 or fails at least 0.10; else no reading. `--reading dref`: the late trickle
 carries something if the cut keeps less than 0.9 of the late reward or fails 0.05 or more above
 the row; it is worth nothing measurable if it keeps at least 0.95 and fails within 0.03 of the
-row; else no reading. Only seeds finished in both folders are read, and a cut whose summary does
-not say it branched at or before the cut step is refused.
+row; else no reading. Only seeds finished in both folders are read (`--seeds 9,5,7` reads only
+those), and a cut whose summary does not say it branched at or before the cut step is refused.
+Last, the whole runs paired: the cut's cumulative reward less the row's per seed, and the exact
+one-sided sign-flip test that the cut ends above the row (the reading of DREF normed until 60k as
+a row, lunar-layer-norm-until-60k.jobs).
 """
 
 from __future__ import annotations
@@ -58,15 +61,23 @@ def branched_at(run: Path, cut_step: int) -> int:
     return branch["step"] if branch else 0
 
 
+def cumulative(run: Path) -> float:
+    return json.loads((run / "summary.json").read_text())["cumulative_return"]
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--reading", choices=["ef-100", "dref"], required=True)
     parser.add_argument("row", type=Path, help="the row's folder of seed<N>/ runs")
     parser.add_argument("cut", type=Path, help="its cut's folder of seed<N>/ runs")
     parser.add_argument("--at", type=int, default=60_000, help="the cut's feedback_until")
+    parser.add_argument("--seeds", help="read only these seeds, e.g. 9,5,7 (default: every one)")
     args = parser.parse_args()
     rows, cuts = finished_seeds(args.row), finished_seeds(args.cut)
     seeds = sorted(set(rows) & set(cuts))
+    if args.seeds:
+        wanted = {int(seed) for seed in args.seeds.split(",")}
+        seeds = [seed for seed in seeds if seed in wanted]
     if not seeds:
         raise SystemExit(f"no seed has finished in both {args.row} and {args.cut}")
     print(f"episodes ending at or after step {args.at}; seeds {seeds}; reading: {args.reading}")
@@ -94,6 +105,13 @@ def main() -> None:
             f"{r:+.2f} +- {rs:.2f} on the row; the cut fails more on "
             f"{sum(x > 0 for x in rises)} of {len(seeds)} seeds, exact one-sided sign-flip "
             f"p = {paired_p_above(rises):.4f}"
+        )
+        gains = [cumulative(cuts[seed]) - cumulative(rows[seed]) for seed in seeds]
+        g, gs = mean_se(gains)
+        print(
+            f"whole runs: the cut's cumulative reward less the row's {g / 1e3:+.1f}k +- "
+            f"{gs / 1e3:.1f}k, above on {sum(x > 0 for x in gains)} of {len(seeds)} seeds, exact "
+            f"one-sided sign-flip p = {paired_p_above(gains):.4f}"
         )
 
 
