@@ -3,7 +3,7 @@
 one-sided Mann-Whitney test that the first row lies above the second.
 
     python3 benches/grids/rows.py docs/results/dref-ablation/ablation-window/placing/dref-authors \
-        [docs/results/fig3/placing/dref-authors]
+        [docs/results/fig3/placing/dref-authors] [--seeds 9,5,7]
 
 A folder holds `seed<N>/` runs (summary.json, metrics.csv). Each run's line: cumulative reward,
 feedback % (and, where the run has answers.csv, the share of its answers that were +1), longest
@@ -11,15 +11,15 @@ flood after 2k steps, successes in its last 10 episodes (on Lunar Lander with th
 wall seconds and kernels; a run learns as the report says (8 or more of its
 last 10 succeed; on Lunar Lander their mean return is 200 or more). The test counts ties as one
 half and enumerates every split of the pooled ranks, so its p is exact for the seeds given (no
-normal approximation).
+normal approximation). `--seeds` reads only the seeds it names, in both folders.
 """
 
 from __future__ import annotations
 
+import argparse
 import csv
 import json
 import math
-import sys
 from functools import lru_cache
 from pathlib import Path
 
@@ -138,10 +138,14 @@ def last10_return(run: dict) -> str:
 
 
 def main() -> None:
-    folders = [Path(a) for a in sys.argv[1:3]]
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("folders", type=Path, nargs="+", help="one or two folders of seed<N>/ runs")
+    parser.add_argument("--seeds", help="read only these seeds, e.g. 9,5,7 (default: every one)")
+    args = parser.parse_args()
+    wanted = {int(seed) for seed in args.seeds.split(",")} if args.seeds else None
     groups = []
-    for folder in folders:
-        rows = runs(folder)
+    for folder in args.folders[:2]:
+        rows = [r for r in runs(folder) if wanted is None or r["seed"] in wanted]
         print(folder)
         for r in rows:
             print(
