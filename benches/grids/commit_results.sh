@@ -42,9 +42,12 @@ print(
 )
 PY
 )
-    git add -- "$run"
-    git commit -q -m "results: ${run#docs/results/} (${figures})" -- "$run"
-    echo "$(date -u +%FT%TZ) committed $(git log --oneline -1)"
+    # A run that cannot be committed is said in the log and left staged; the watcher goes on.
+    if git add -- "$run" && git commit -q -m "results: ${run#docs/results/} (${figures})" -- "$run"; then
+      echo "$(date -u +%FT%TZ) committed $(git log --oneline -1)"
+    else
+      echo "$(date -u +%FT%TZ) could not commit $run: commit it by hand"
+    fi
     seen[$summary]=1
   done
   sleep 20

@@ -31,7 +31,7 @@ from pathlib import Path
 from gap_stretches import finished_seeds
 from late_asks import paired_p_above
 from late_outcomes import Late, late_outcomes
-from rows import mean_se
+from rows import mean_se, seed_list
 
 
 def verdict(reading: str, row: Late, cut: Late) -> str:
@@ -71,13 +71,14 @@ def main() -> None:
     parser.add_argument("row", type=Path, help="the row's folder of seed<N>/ runs")
     parser.add_argument("cut", type=Path, help="its cut's folder of seed<N>/ runs")
     parser.add_argument("--at", type=int, default=60_000, help="the cut's feedback_until")
-    parser.add_argument("--seeds", help="read only these seeds, e.g. 9,5,7 (default: every one)")
+    parser.add_argument(
+        "--seeds", type=seed_list, help="read only these seeds, e.g. 9,5,7 (default: every one)"
+    )
     args = parser.parse_args()
     rows, cuts = finished_seeds(args.row), finished_seeds(args.cut)
     seeds = sorted(set(rows) & set(cuts))
     if args.seeds:
-        wanted = {int(seed) for seed in args.seeds.split(",")}
-        seeds = [seed for seed in seeds if seed in wanted]
+        seeds = [seed for seed in seeds if seed in args.seeds]
     if not seeds:
         raise SystemExit(f"no seed has finished in both {args.row} and {args.cut}")
     print(f"episodes ending at or after step {args.at}; seeds {seeds}; reading: {args.reading}")

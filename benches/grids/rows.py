@@ -137,14 +137,26 @@ def last10_return(run: dict) -> str:
     return f" (mean return {run['last10_return']:.1f})"
 
 
+def seed_list(text: str) -> set[int]:
+    """`--seeds 9,5,7` as a set; argparse names the option and the text when it does not read."""
+    try:
+        return {int(seed) for seed in text.split(",")}
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seeds such as 9,5,7, got {text!r}") from None
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("folders", type=Path, nargs="+", help="one or two folders of seed<N>/ runs")
-    parser.add_argument("--seeds", help="read only these seeds, e.g. 9,5,7 (default: every one)")
+    parser.add_argument(
+        "--seeds", type=seed_list, help="read only these seeds, e.g. 9,5,7 (default: every one)"
+    )
     args = parser.parse_args()
-    wanted = {int(seed) for seed in args.seeds.split(",")} if args.seeds else None
+    if len(args.folders) > 2:
+        parser.error(f"at most two folders, got {len(args.folders)}")
+    wanted = args.seeds
     groups = []
-    for folder in args.folders[:2]:
+    for folder in args.folders:
         rows = [r for r in runs(folder) if wanted is None or r["seed"] in wanted]
         print(folder)
         for r in rows:
