@@ -15,12 +15,10 @@ the step is left out of the test, by name.
 
 from __future__ import annotations
 
-import argparse
 import csv
 from pathlib import Path
 
-from gap_stretches import finished_seeds
-from late_asks import paired_p_above
+from late_asks import late_row, paired_p_above
 from rows import mean_se
 
 OUTCOMES = [("success", "land"), ("failure", "fail"), ("time_limit", "time limit")]
@@ -47,13 +45,7 @@ def share(asked_good: tuple[int, int]) -> float | None:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("row", type=Path, help="the row's folder of seed<N>/ runs")
-    parser.add_argument("--from", dest="start", type=int, default=60_000)
-    args = parser.parse_args()
-    runs = finished_seeds(args.row)
-    if not runs:
-        raise SystemExit(f"no seed has finished in {args.row}")
+    args, runs = late_row(__doc__)
     print(f"{args.row}: answers in episodes ending at or after step {args.start}")
     print("| seed | " + " | ".join(f"{label}: asked, +1" for _, label in OUTCOMES) + " |")
     print("|---:|" + "---:|" * len(OUTCOMES))

@@ -72,14 +72,20 @@ def fmt(v: float | None, digits: int = 4) -> str:
     return "-" if v is None else f"{v:.{digits}f}"
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def late_row(doc: str) -> tuple[argparse.Namespace, dict[int, Path]]:
+    """A script's one row and `--from` step from the command line, and the row's finished runs."""
+    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0])
     parser.add_argument("row", type=Path, help="the row's folder of seed<N>/ runs")
     parser.add_argument("--from", dest="start", type=int, default=60_000)
     args = parser.parse_args()
     runs = finished_seeds(args.row)
     if not runs:
         raise SystemExit(f"no seed has finished in {args.row}")
+    return args, runs
+
+
+def main() -> None:
+    args, runs = late_row(__doc__)
     print(f"{args.row}: episodes ending at or after step {args.start}")
     print(
         "| seed | asks a step: fail | land | time limit | fail / land "
