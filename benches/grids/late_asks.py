@@ -35,12 +35,16 @@ class ByOutcome:
     steps: int = 0
     asked: int = 0
     bad: int = 0
+    good: int = 0
 
     def rate(self) -> float | None:
         return self.asked / self.steps if self.steps else None
 
     def bad_share(self) -> float | None:
         return self.bad / self.asked if self.asked else None
+
+    def good_share(self) -> float | None:
+        return self.good / self.asked if self.asked else None
 
 
 def late_asks(run: Path, start: int) -> dict[str, ByOutcome]:
@@ -57,6 +61,7 @@ def late_asks(run: Path, start: int) -> dict[str, ByOutcome]:
             g.steps += int(r["length"])
             g.asked += int(a["asked"]) if a else 0
             g.bad += int(a["bad"]) if a else 0
+            g.good += int(a["good"]) if a else 0
     return by
 
 
