@@ -1,13 +1,12 @@
 //! The `dualrep` binary as a user runs it: JSON on success, a clear message and a non-zero exit
 //! on bad arguments.
 
-use std::process::{Command, Output};
+use std::process::Output;
+
+use crate::support::cli::{dualrep_in, refused};
 
 fn dualrep(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dualrep"))
-        .args(args)
-        .output()
-        .expect("binary runs")
+    dualrep_in(args, None)
 }
 
 #[test]
@@ -212,9 +211,8 @@ fn bench_sac_reports_the_work_it_skips_beside_the_nominal_work() {
 
 fn assert_rejected(args: &[&str], expected_in_message: &str) {
     let out = dualrep(args);
-    assert!(!out.status.success(), "{args:?} should fail");
+    let stderr = refused(&out);
     assert!(out.stdout.is_empty(), "nothing on stdout for {args:?}");
-    let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
         stderr.contains(expected_in_message),
         "{args:?}: stderr was {stderr}"

@@ -70,9 +70,7 @@ fn sim_rolls_out_the_policy_of_a_runs_checkpoint() {
     );
 
     let refused = |extra: &[&str], expected: &str| {
-        let out = sim(extra);
-        assert!(!out.status.success(), "{extra:?} should fail");
-        let stderr = String::from_utf8_lossy(&out.stderr);
+        let stderr = cli::refused(&sim(extra));
         assert!(stderr.contains(expected), "{extra:?}: {stderr}");
     };
     refused(&["--task", "reaching"], "is of a lunar-lander run");

@@ -4,7 +4,7 @@
 //! loses nothing; results and the tidy table count every participant × condition.
 
 use crate::support::binary::start_serve;
-use crate::support::cli::dualrep_in;
+use crate::support::cli::{dualrep_in, refused};
 use crate::support::pyarrow_py::read_parquet;
 use crate::support::rest::{Reply, call, poll_json};
 use crate::support::server::{TOKEN, state};
@@ -270,9 +270,7 @@ async fn participants_follow_their_williams_order_and_the_results_count_each_of_
         summary.contains("3 participants, 2 with every condition"),
         "{summary}"
     );
-    let missing = report("nope");
-    assert!(!missing.status.success());
-    assert!(String::from_utf8_lossy(&missing.stderr).contains("no study nope"));
+    assert!(refused(&report("nope")).contains("no study nope"));
 }
 
 #[tokio::test]
@@ -359,7 +357,7 @@ fn the_cli_creates_and_lists_studies_on_a_running_server() {
     bad["survey"] = json!([]);
     let bad_spec = data.path().join("bad.json");
     std::fs::write(&bad_spec, bad.to_string()).unwrap();
-    let refused = dualrep_in(
+    let out = dualrep_in(
         &[
             "study",
             "create",
@@ -372,8 +370,7 @@ fn the_cli_creates_and_lists_studies_on_a_running_server() {
         ],
         None,
     );
-    assert!(!refused.status.success());
-    let stderr = String::from_utf8_lossy(&refused.stderr);
+    let stderr = refused(&out);
     assert!(
         stderr.contains("survey: needs at least one question"),
         "{stderr}"

@@ -123,9 +123,7 @@ fn a_pilot_trains_its_pool_and_reports_power_for_each_n() {
 
 fn assert_refused(d: &Path, pilot: &str, extra: &[&str], expected: &str) {
     write_pilot(d, pilot);
-    let out = run_pilot(d, "out", extra);
-    assert!(!out.status.success(), "{pilot} {extra:?} should fail");
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stderr = cli::refused(&run_pilot(d, "out", extra));
     assert!(
         stderr.contains(expected),
         "{pilot} {extra:?}: stderr was {stderr}"
@@ -181,8 +179,7 @@ fn bad_pilots_are_refused_naming_what_was_wrong() {
         &["study", "pilot", "--spec", "pilot.yaml", "--out", "out"],
         d,
     );
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("expected a .toml or .json file"));
+    assert!(cli::refused(&out).contains("expected a .toml or .json file"));
 
     fs::write(
         d.join("study.json"),

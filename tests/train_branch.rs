@@ -145,9 +145,7 @@ fn a_branch_is_the_run_its_settings_make_from_step_0_row_for_row() {
     let refused = |out_dir: &str, extra: &[&str], says: &[&str]| {
         let mut extra = extra.to_vec();
         extra.extend(["--branch-from", &from]);
-        let out = dualrep(&small_lunar_ef100(out_dir, &extra), d);
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success(), "{out_dir}: {stderr}");
+        let stderr = cli::refused(&dualrep(&small_lunar_ef100(out_dir, &extra), d));
         for s in says {
             assert!(stderr.contains(s), "{out_dir}: {s:?} in {stderr}");
         }

@@ -273,8 +273,7 @@ fn a_run_killed_midway_resumes_from_its_checkpoint_to_the_same_result() {
         &other.iter().map(String::as_str).collect::<Vec<_>>(),
         Some(d),
     );
-    assert!(!out.status.success());
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stderr = cli::refused(&out);
     assert!(
         stderr.contains("another configuration") && stderr.contains("delete it"),
         "{stderr}"
@@ -343,8 +342,7 @@ fn a_second_train_on_a_running_folder_is_refused_and_touches_nothing() {
     let mut first = running_once(&train("1000000"), d, "run/metrics.csv");
     let second = train("50");
     let out = dualrep(&second.iter().map(String::as_str).collect::<Vec<_>>(), d);
-    assert!(!out.status.success(), "a second writer was let in");
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stderr = cli::refused(&out);
     assert!(
         stderr.contains("another `dualrep train` is writing"),
         "{stderr}"
@@ -370,9 +368,7 @@ fn bad_input_is_refused_with_a_clear_message() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let refused = |args: &[&str], needle: &str| {
-        let out = dualrep(args, d);
-        assert!(!out.status.success(), "{args:?} accepted");
-        let err = String::from_utf8_lossy(&out.stderr);
+        let err = cli::refused(&dualrep(args, d));
         assert!(err.contains(needle), "{args:?}: {err}");
     };
     // Without `--expert` the binary's own expert is used; a named one must exist.
